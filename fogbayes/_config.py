@@ -1,0 +1,12 @@
+"""Numerical configuration applied when fogbayes is imported.
+
+fogbayes fits in float64: the papers' coefficients span 1e1 ... 1e-12 and Allan variances
+span many decades, so single precision loses the answer. Importing fogbayes therefore turns
+on JAX's 64-bit mode (``jax_enable_x64``), the same switch as ``JAX_ENABLE_X64=1`` or
+``numpyro.enable_x64()``. Arrays created with an explicit ``dtype=jnp.float32`` stay
+float32, which is how the compensators run in single precision when asked.
+"""
+
+import jax
+
+jax.config.update("jax_enable_x64", True)

@@ -1,0 +1,39 @@
+"""Test configuration: strict numerics and access to the measured data in ../shared.
+
+float64 is switched on by importing fogbayes (fogbayes._config); we import it here so
+every test runs with the library's own configuration, never flipping it in a test body.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+import fogbayes  # noqa: F401  (turns on jax_enable_x64)
+
+REPO = Path(__file__).resolve().parents[1]
+SHARED = Path(os.environ.get("FOGBAYES_SHARED", REPO.parent / "shared"))
+MEASURED = SHARED / "data" / "measured"
+
+
+def measured_path(*parts: str) -> Path:
+    """Path of a measured data file in ../shared; skip (or fail under CI) when absent.
+
+    The ADIS16405 runs are licensed for non-commercial use only, so they are never copied
+    into this repository: tests read them from ../shared/data/measured.
+    """
+    p = MEASURED.joinpath(*parts)
+    if not p.exists():
+        msg = f"measured data not found at {p} (set FOGBAYES_SHARED to the shared/ folder)"
+        if os.environ.get("CI"):
+            pytest.fail(msg + "; CI must have ../shared beside the clone")
+        pytest.skip(msg)
+    return p
+
+
+@pytest.fixture
+def measured():
+    """Fixture form of :func:`measured_path`."""
+    return measured_path
