@@ -64,7 +64,7 @@ def write_json(obj: Any, out: Path | str) -> None:
 def say(msg: str) -> None:
     """Print a status line to stderr unless --quiet."""
     if not QUIET["on"]:
-        console.print(msg)
+        console.print(msg, markup=False, highlight=False, soft_wrap=True)
 
 
 @contextmanager

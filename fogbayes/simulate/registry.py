@@ -1,0 +1,110 @@
+"""Effects by name: which covariates each needs, its default parameters, one-line help.
+
+``effect_rate(name, cov, params)`` evaluates a deterministic effect in deg/h from the
+true covariates (:class:`~fogbayes.simulate.truth.Covariates`). The names are those the
+closed loop knows (DESIGN.md); ``markov_noise`` is the one stochastic effect and is drawn
+by the scenario with its own seed stream.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, NamedTuple
+
+import numpy as np
+
+from . import effects as fx
+from ._checks import SimulationParameterError
+from .truth import Covariates
+
+
+class EffectSpec(NamedTuple):
+    fn: Callable[[Covariates, dict], np.ndarray] | None  # None: stochastic (markov_noise)
+    defaults: dict[str, Any]
+    description: str
+
+
+def _omega(cov: Covariates, name: str) -> np.ndarray:
+    if cov.input_rate is None:
+        raise SimulationParameterError(
+            f"effect '{name}' acts on the input rate but this scenario has none",
+            column=name, fix="use the 'ratetable' or 'paper000' scenario, or pass input_rate=")
+    return cov.input_rate
+
+
+def _second(cov: Covariates, name: str) -> np.ndarray:
+    if cov.temperatures.shape[1] < 2:
+        raise SimulationParameterError(
+            f"effect '{name}' needs two temperature channels, this scenario has "
+            f"{cov.temperatures.shape[1]}", column=name, fix="use a scenario with two channels")
+    return cov.temperatures[:, 1]
+
+
+EFFECTS: dict[str, EffectSpec] = {
+    "temperature_order": EffectSpec(
+        lambda c, p: fx.temperature_order(c.temperature, **p),
+        {"coeffs": [0.0, 0.0, 0.0, 2e-6], "T_ref": 20.0},
+        "bias polynomial in temperature, sum_i c_i (T - T_ref)^i (deg/h)"),
+    "temperature_rate": EffectSpec(
+        lambda c, p: fx.temperature_rate(c.dTdt, **p), {"coeff": 0.3},
+        "Shupe term k dT/dt (deg/h per deg C/min)"),
+    "temperature_gradient": EffectSpec(
+        lambda c, p: fx.temperature_gradient(c.temperature, _second(c, "temperature_gradient"), **p),
+        {"coeff": 0.03}, "k (T2 - T1) between the two channels (deg/h per deg C)"),
+    "thermal_hysteresis": EffectSpec(
+        lambda c, p: fx.thermal_hysteresis(c.dTdt, **p), {"size": 0.2, "rate_scale": 0.05},
+        "(h/2) tanh(dT/dt / r0): bias h higher heating than cooling (deg/h)"),
+    "thermal_lag": EffectSpec(
+        lambda c, p: fx.thermal_lag(c.time, c.temperature, **p),
+        {"coeff": 0.01, "tau": 1800.0, "T_ref": 20.0},
+        "k (T_lag - T_ref), T_lag = T through a first-order lag tau (s)"),
+    "time_drift": EffectSpec(
+        lambda c, p: fx.time_drift(c.time, **p), {"slope": 0.0, "amplitude": 1.0, "tau": 5400.0},
+        "s t/3600 + A (1 - exp(-t/tau)): drift and warm-up (deg/h)"),
+    "periodic": EffectSpec(
+        lambda c, p: fx.periodic(c.time, **p),
+        {"amplitude": 0.1, "frequency": 1.0 / 600.0, "phase": 0.0},
+        "A sin(2 pi f t + phase) (deg/h, Hz)"),
+    "step": EffectSpec(
+        lambda c, p: fx.step(c.time, **p), {"time": None, "size": 0.2},
+        "bias step of `size` deg/h at `time` s (default: mid-record)"),
+    "scale_factor_nonlinearity": EffectSpec(
+        lambda c, p: fx.scale_factor_nonlinearity(_omega(c, "scale_factor_nonlinearity"), **p),
+        {"k2": 1e-6, "k3": 1e-8}, "3600 (k2 w^2 + k3 w^3) deg/h, w in deg/s"),
+    "scale_factor_asymmetry": EffectSpec(
+        lambda c, p: fx.scale_factor_asymmetry(_omega(c, "scale_factor_asymmetry"), **p),
+        {"asymmetry": 1e-4}, "1800 a |w| deg/h: scale (1 +- a/2) for w > 0 / w < 0"),
+    "scale_factor_temperature": EffectSpec(
+        lambda c, p: fx.scale_factor_temperature(_omega(c, "scale_factor_temperature"),
+                                                 c.temperature, **p),
+        {"coeff": 1e-6, "T_ref": 20.0}, "3600 w k (T - T_ref) deg/h: scale linear in T"),
+    "markov_noise": EffectSpec(
+        None, {"sigma": 0.05, "tau_c": 300.0},
+        "first-order Gauss-Markov noise, std sigma deg/h, correlation time tau_c s"),
+    "paper004": EffectSpec(
+        lambda c, p: fx.paper004_bias(c.temperature, c.dTdt, **p),
+        {"c": [0.0, 0.0, 0.0], "d": [0.0, 0.0], "cross": 0.0, "T_ref": 0.0},
+        "paper 004 bias: order-2 polynomial in T and dT/dt (+ cross term) (deg/h)"),
+}
+
+
+def resolve(name: str, params: dict | None, cov: Covariates) -> dict[str, Any]:
+    """The effect's full parameter set: defaults updated by ``params``; unknown keys raise."""
+    if name not in EFFECTS:
+        raise SimulationParameterError(f"unknown effect '{name}'", column="effects",
+                                       fix=f"use one of {', '.join(sorted(EFFECTS))}")
+    spec = EFFECTS[name]
+    params = dict(params or {})
+    bad = set(params) - set(spec.defaults)
+    if bad:
+        raise SimulationParameterError(
+            f"effect '{name}' has no parameter(s) {sorted(bad)}", column=name,
+            fix=f"use {sorted(spec.defaults)}")
+    full = {**spec.defaults, **params}
+    if name == "step" and full["time"] is None:
+        full["time"] = float(cov.time[0] + 0.5 * (cov.time[-1] - cov.time[0]))
+    return full
+
+
+def effect_rate(name: str, cov: Covariates, params: dict) -> np.ndarray:
+    """Deterministic effect ``name`` in deg/h with the full parameters ``params``."""
+    return np.broadcast_to(EFFECTS[name].fn(cov, params), cov.time.shape).astype(float)
