@@ -82,3 +82,7 @@ class UnitError(FogbayesError):
 
 class ShapeError(FogbayesError):
     """Arrays handed to a Recording do not have matching lengths or shapes."""
+
+
+class ArgumentError(FogbayesError):
+    """An argument value is invalid (a window, an order, a method or scenario name)."""

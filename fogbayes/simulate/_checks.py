@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from ..errors import FogbayesError
+from ..errors import ArgumentError
 
 
-class SimulationParameterError(FogbayesError):
+class SimulationParameterError(ArgumentError):
     """A simulator argument is out of range (negative noise level, unknown effect, ...)."""
 
 

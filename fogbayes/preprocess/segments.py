@@ -1,0 +1,115 @@
+"""Segmentation of a thermal test into soaks and ramps.
+
+Each sample is labelled by its smoothed temperature rate ``r`` (Savitzky-Golay slope over
+``smooth_s``, see :mod:`.temperature_rate`; this is what makes it robust to thermometer
+noise and quantisation)::
+
+    soak       |r| <= rate_threshold
+    ramp_up    r > rate_threshold
+    ramp_down  r < -rate_threshold
+
+Runs of equal labels shorter than ``min_duration`` are then merged, shortest first, into
+their neighbours (into the common label when both neighbours agree, else into the longer
+neighbour), so noise and the short transitions at ramp corners do not make segments.
+Boundaries are fuzzy by about ``smooth_s / 2``: the smoothed rate crosses the threshold
+before the corner. Segments are not cut at sampling gaps.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import FogbayesError
+from ._checks import GAP_FACTOR, as_1d, check_time, check_window, median_step, same_length
+from .temperature_rate import ls_slope, temperature_rate
+
+_KINDS = {0: "soak", 1: "ramp_up", -1: "ramp_down"}
+
+
+class Segment(NamedTuple):
+    """A soak or a ramp: samples ``start:stop`` (stop exclusive), times of its first and
+    last sample, mean temperature (deg C), and least-squares temperature slope (deg C/s)."""
+
+    kind: str
+    start: int
+    stop: int
+    t_start: float
+    t_stop: float
+    mean_temperature: float
+    mean_rate: float
+
+
+def _runs(labels: np.ndarray) -> list[list[int]]:
+    """[label, start, stop] for each run of equal labels."""
+    edges = np.flatnonzero(np.diff(labels)) + 1
+    starts = np.r_[0, edges]
+    stops = np.r_[edges, labels.size]
+    return [[int(labels[a]), int(a), int(b)] for a, b in zip(starts, stops)]
+
+
+def merge_short_runs(labels: np.ndarray, t: np.ndarray, min_duration: float) -> list[list[int]]:
+    """Runs of ``labels`` with those shorter than ``min_duration`` (s) merged away."""
+    runs = _runs(labels)
+    end = np.r_[t[1:], t[-1] + median_step(t)] if t.size > 1 else t + 1.0
+
+    def duration(r):
+        return float(end[r[2] - 1] - t[r[1]])
+
+    while len(runs) > 1:
+        d = [duration(r) for r in runs]
+        i = int(np.argmin(d))
+        if d[i] >= min_duration:
+            break
+        left = runs[i - 1] if i > 0 else None
+        right = runs[i + 1] if i + 1 < len(runs) else None
+        if left is not None and right is not None and left[0] == right[0]:
+            new = left[0]
+        elif left is None or (right is not None and d[i + 1] > d[i - 1]):
+            new = right[0]
+        else:
+            new = left[0]
+        runs[i][0] = new
+        merged = [runs[0]]  # join neighbours that now share a label
+        for r in runs[1:]:
+            if r[0] == merged[-1][0]:
+                merged[-1] = [r[0], merged[-1][1], r[2]]
+            else:
+                merged.append(r)
+        runs = merged
+    return runs
+
+
+def segment_thermal(time, temperature, *, rate_threshold: float = 0.1 / 60.0,
+                    min_duration: float = 300.0, smooth_s: float = 60.0,
+                    gap_factor: float = GAP_FACTOR) -> list[Segment]:
+    """Split a thermal test into soaks and ramps (see the module doc).
+
+    Args:
+        time: (n,) s.
+        temperature: (n,) deg C.
+        rate_threshold: deg C/s separating soaks from ramps (default 0.1 deg C/min; paper
+            004 ramps at 0.5 deg C/min).
+        min_duration: shortest segment kept (s).
+        smooth_s: window of the temperature-rate smoother (s).
+
+    Returns:
+        Segments in time order, covering every sample once.
+    """
+    t = check_time(time)
+    T = as_1d(temperature, "temperature")
+    same_length(time=t, temperature=T)
+    if not np.isfinite(rate_threshold) or rate_threshold <= 0:
+        raise FogbayesError(f"rate_threshold must be positive, got {rate_threshold!r}",
+                            column="rate_threshold",
+                            fix="pass e.g. rate_threshold=0.1/60 (deg C/s)")
+    check_window(smooth_s, t, name="smooth_s")
+    r = temperature_rate(t, T, method="savgol", window_s=smooth_s, polyorder=1,
+                         gap_factor=gap_factor)
+    labels = np.where(r > rate_threshold, 1, np.where(r < -rate_threshold, -1, 0))
+    out = []
+    for lab, a, b in merge_short_runs(labels, t, float(min_duration)):
+        out.append(Segment(_KINDS[lab], a, b, float(t[a]), float(t[b - 1]), float(T[a:b].mean()),
+                           ls_slope(t[a:b], T[a:b])))
+    return out
