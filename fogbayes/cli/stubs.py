@@ -8,7 +8,6 @@ from ._app import app
 
 _NOT_BUILT = {
     "loop": "the closed loop (fit -> diagnose -> add effect -> refit)",
-    "report": "the standalone calibration report",
     "batch": "fleet processing of many recordings",
 }
 

@@ -1,0 +1,57 @@
+"""``fogbayes report REC``: one self-contained HTML calibration report."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+from ..errors import FileFormatError
+from ._app import app
+from ._common import REC_ARG, load_recording, progress, say
+
+
+def _read_json(path: Path, what: str) -> dict:
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise FileFormatError(f"cannot read the {what} JSON ({exc})", file=str(path),
+                              fix=f"pass the file written by 'fogbayes {what} --json'") from None
+
+
+@app.command()
+def report(
+    rec_path: Path = REC_ARG,
+    out: Path = typer.Option(Path("report.html"), "--out", "-o", help="HTML file to write."),
+    model: str = typer.Option(None, help="Fit this model first: bias-t, thermal, composite, allan."),
+    fit: Path = typer.Option(None, help="Use this fit document (from 'fogbayes fit --json')."),
+    loop_json: Path = typer.Option(None, "--loop", help="Re-run and tell the closed loop "
+                                   "recorded in this JSON (from 'fogbayes loop --json')."),
+    bayes: bool = typer.Option(False, help="Posterior intervals (NumPyro) with --model."),
+    pdf: Path = typer.Option(None, help="Also print the report to this PDF (headless Chromium)."),
+    column: str = typer.Option("output", help="Name of the gyro output column."),
+    output_unit: str = typer.Option(None, help="Output unit (default from the file, else deg/h)."),
+    scale_factor: float = typer.Option(None, help="Raw units per deg/s for V/mV/Hz outputs."),
+    seed: int = typer.Option(0, help="Random seed of the samplers."),
+):
+    """Write a calibration report: recording, fitted model, residuals, compensation, noise.
+
+    Example: fogbayes report chamber.csv --model thermal --out chamber_report.html
+    """
+    from ..workflow.report import build_report, print_pdf
+
+    rec = load_recording(rec_path, column=column, output_unit=output_unit, scale_factor=scale_factor)
+    fit_doc = _read_json(fit, "fit") if fit else None
+    loop_res = None
+    with progress("building the report"):
+        if loop_json:
+            from ..loop import run_loop
+
+            doc = _read_json(loop_json, "loop")
+            loop_res = run_loop(rec, doc.get("model", model or "bias-t"),
+                                max_steps=max(1, len(doc.get("steps", [])) or 1), seed=seed)
+        path = build_report(rec, out, model=model, fit=fit_doc, loop=loop_res, bayes=bayes, seed=seed)
+    say(f"wrote {path}")
+    if pdf:
+        say(f"wrote {print_pdf(path, pdf)}")
