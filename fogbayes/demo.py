@@ -80,45 +80,27 @@ def _summary(rec, fits, stability, report) -> str:
 
 def _write_report(path, rec, sim, fits, comp, adev, oracle):
     from .plot.demo import plot_adev_compare, plot_compensation
-    from .plot.recording import plot_recording
+    from .report import sections as S
     from .report.html import Section, write
+    from .workflow.report import covariates
 
-    s = rec.sampling()
-    intro = Section("Recording").text(
-        f"Simulated thermal-chamber test of sensor {rec.meta.sensor_id}: {rec.n} samples over "
-        f"{s.duration / 3600:.2f} h at {s.sample_rate:g} Hz, {len(s.gaps)} gaps. The bias has a "
-        "quadratic temperature dependence and a Shupe (temperature-rate) term; the noise is "
-        "white + flicker + rate random walk.")
-    intro.table(["quantity", "value"], [["samples", rec.n], ["duration [h]", s.duration / 3600],
-                                        ["sample rate [Hz]", s.sample_rate],
-                                        ["temperature range [°C]",
-                                         f"{rec.temperature.min():.1f} … {rec.temperature.max():.1f}"]])
-    intro.figure(plot_recording(rec), caption="Output and temperature channels.")
-
-    fit_sec = Section("Fitted models")
+    intro = S.recording_section(rec)
+    intro.text("Simulated thermal-chamber test: the bias has a quadratic temperature dependence "
+               "and a Shupe (temperature-rate) term; the noise is white + flicker + rate random walk. "
+               "The model people usually declare, bias-t, lacks the temperature-rate term.")
+    parts = [intro]
     for model, doc in fits.items():
-        p = doc["params"]
-        raw = p["raw"]
-        se = raw.get("stderr", [float("nan")] * len(raw["coef"]))
-        rows = [[name, c, e] for name, c, e in zip(raw["terms"], raw["coef"], se)]
-        fit_sec.text(f"{model}: converged = {doc['converged']}, {doc['fit']['n_blocks']} blocks, "
-                     f"residual std {doc['fit']['residual_std']:.4g} deg/h, RMS criterion "
-                     f"{doc['fit']['rms_criterion']:.4g}.")
-        if rows:
-            fit_sec.table(["term", "coefficient", "std. error"], rows, caption=f"{model}: raw (display) coefficients")
-        for w in doc.get("warnings", []):
-            fit_sec.note(w, ok=False)
-
-    comp_sec = Section("Compensation: bias stability before and after")
-    rows = []
-    for model, doc in fits.items():
-        for r in doc["metrics"]["full"]["stability"]:
-            rows.append([model, r["window_s"], r["before"], r["after"], r["improvement_pct"]])
-    comp_sec.table(["model", "window [s]", "before [deg/h]", "after [deg/h]", "improvement [%]"], rows)
-    comp_sec.figure(plot_compensation(rec, {m: c["output"] for m, c in comp.items()}, oracle),
-                    caption="Raw and compensated output (10 s means); the oracle removes the true "
-                            "deterministic error and shows the noise floor.")
-    allan_sec = Section("Allan deviation").figure(
-        plot_adev_compare(adev), caption="Overlapping ADEV with 90 % confidence bars.")
-    return write(path, "fogbayes demo: thermal calibration of a simulated FOG",
-                 [intro, fit_sec, comp_sec, allan_sec])
+        parts.append(S.model_section(doc))
+        stab = S.stability_section(doc)
+        stab.title = f"{model}: bias stability before and after"
+        parts.append(stab)
+    resid = S.residual_section(rec, comp["bias-t"]["output"], covariates(rec))
+    resid.title = "Residuals after bias-t: what the declared model lacks"
+    parts.append(resid)
+    parts.append(Section("Compensation").figure(
+        plot_compensation(rec, {m: c["output"] for m, c in comp.items()}, oracle),
+        caption="Raw and compensated output (10 s means); the oracle removes the true "
+                "deterministic error and shows the noise floor."))
+    parts.append(Section("Allan deviation").figure(
+        plot_adev_compare(adev), caption="Overlapping ADEV with 90 % confidence bars."))
+    return write(path, "fogbayes demo: thermal calibration of a simulated FOG", parts)

@@ -60,7 +60,8 @@ def test_report_renders_without_console_errors(demo_report, tmp_path):
 def test_report_dom_has_every_section_with_figures_and_tables(demo_report):
     exe = _chromium()
     dom = _run(exe, "--dump-dom", demo_report.as_uri()).stdout
-    for title in ("Recording", "Fitted models", "Compensation", "Allan deviation"):
+    for title in ("Recording", "Fitted model: bias-t", "Fitted model: thermal", "Residuals",
+                  "Compensation", "Allan deviation"):
         assert f">{title}" in dom
     assert dom.count("<table") >= 3
     images = re.findall(r'src="data:image/png;base64,([^"]+)"', dom)
