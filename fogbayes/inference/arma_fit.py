@@ -1,0 +1,213 @@
+"""ARMA(p, q) estimation: long-autoregression (Hannan-Rissanen) start, exact MLE with optax.
+
+Paper 002's "long autoregression" method, in its standard two-stage form (Hannan and
+Rissanen 1982):
+
+1. fit a long AR(m) by least squares, x_t = sum_{i<=m} psi_i x_{t-i} + a_t, and keep its
+   residuals a^_t (they estimate the innovations because theta(L)^{-1} phi(L) ~ psi(L));
+2. regress x_t on x_{t-1..t-p} and a^_{t-1..t-q}:
+   x_t = sum phi_i x_{t-i} - sum theta_j a^_{t-j} + a_t (paper sign, hence theta = -coef).
+
+The exact maximum-likelihood fit starts there and maximises the sigma2-profiled exact
+log-likelihood (:func:`fogbayes.models.arma.arma_profile_loglik`) with optax L-BFGS over
+u = atanh(PACF) (stationary and invertible by construction), stopping when the gradient of
+-log L_p / n is below ``tol``. Standard errors come from the Hessian of the profile
+log-likelihood in (phi, theta) and 2 sigma2^2 / n for sigma2.
+
+Everything is a pure function of static (p, q) and an array; ``fit_arma_batch`` is the same
+fit vmapped over many series of equal length in one compiled call.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import optax
+from jax import lax
+
+from ..models.arma import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
+
+Array = jax.Array
+
+
+class ArmaStart(NamedTuple):
+    """Two-stage long-AR estimate: phi (p,), theta (q,), sigma2, and the long-AR order m."""
+
+    phi: Array
+    theta: Array
+    sigma2: Array
+    ar_order: int
+
+
+class ArmaFit(NamedTuple):
+    """Exact maximum-likelihood ARMA(p, q) fit (paper sign convention).
+
+    phi (p,), theta (q,), sigma2; loglik (exact, at the optimum); se_* standard errors;
+    converged: gradient criterion met with finite values; n_iter: L-BFGS iterations;
+    grad_norm: max |d(-log L_p / n)/du| at the end.
+    """
+
+    phi: Array
+    theta: Array
+    sigma2: Array
+    loglik: Array
+    se_phi: Array
+    se_theta: Array
+    se_sigma2: Array
+    converged: Array
+    n_iter: Array
+    grad_norm: Array
+
+
+def default_ar_order(n: int, p: int, q: int) -> int:
+    """Long-AR order m: about 10 log10(n) (enough for MA roots up to ~0.9), >= p + q + 1."""
+    return int(max(p + q + 1, min(round(10 * math.log10(max(n, 10))), max(n // 10, 1))))
+
+
+def _lags(x: Array, k: int, start: int) -> Array:
+    """Columns x_{t-1}, ..., x_{t-k} for t = start..n-1 (shape (n - start, k)), one gather."""
+    n = x.shape[0]
+    idx = jnp.arange(start, n)[:, None] - jnp.arange(1, k + 1)[None, :]
+    return x[idx]
+
+
+def _ols(X: Array, y: Array, mask: Array) -> Array:
+    """Least squares by the normal equations (X: a few lag columns of a stationary series).
+
+    Masked (all-zero) columns get a unit diagonal so their coefficient is exactly 0.
+    """
+    if X.shape[1] == 0:
+        return jnp.zeros(0)
+    return jnp.linalg.solve(X.T @ X + jnp.diag(1.0 - mask), X.T @ y)
+
+
+@partial(jax.jit, static_argnames=("p", "q", "ar_order"))
+def long_ar_start(x: Array, *, p: int, q: int, ar_order: int | None = None,
+                  mask_phi: Array | None = None, mask_theta: Array | None = None) -> ArmaStart:
+    """Hannan-Rissanen two-stage estimate of ARMA(p, q) (see module docstring).
+
+    ``mask_phi`` (p,) / ``mask_theta`` (q,) of 0/1 fit a lower order inside the same
+    shapes (masked coefficients are exactly 0), so every candidate order of a selection
+    shares one compiled function.
+    """
+    x = jnp.asarray(x, dtype=float)
+    n = x.shape[0]
+    mp = jnp.ones(p) if mask_phi is None else jnp.asarray(mask_phi, dtype=float)
+    mq = jnp.ones(q) if mask_theta is None else jnp.asarray(mask_theta, dtype=float)
+    m = default_ar_order(n, p, q) if ar_order is None else ar_order
+    if q == 0:  # pure AR: stage 2 alone is ordinary least squares on the lags
+        X, y = _lags(x, p, p) * mp, x[p:]
+        phi = _ols(X, y, mp)
+        return ArmaStart(phi, jnp.zeros(0), jnp.mean((y - X @ phi) ** 2), m)
+    psi = _ols(_lags(x, m, m), x[m:], jnp.ones(m))
+    a = jnp.zeros(n).at[m:].set(x[m:] - _lags(x, m, m) @ psi)
+    start = m + q
+    mask = jnp.concatenate([mp, mq])
+    X = jnp.concatenate([_lags(x, p, start), _lags(a, q, start)], axis=1) * mask
+    y = x[start:]
+    coef = _ols(X, y, mask)
+    return ArmaStart(coef[:p], -coef[p:], jnp.mean((y - X @ coef) ** 2), m)
+
+
+def _neg_profile(u: Array, x: Array, p: int, mask: Array) -> Array:
+    u = u * mask  # masked coordinates stay at PACF 0, i.e. coefficient 0
+    phi, theta = unconstrained_to_params(u[:p], u[p:])
+    return -arma_profile_loglik(phi, theta, x)[0] / x.shape[0]
+
+
+@partial(jax.jit, static_argnames=("p", "q", "max_iter"))
+def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7,
+             init: ArmaStart | None = None, mask_phi: Array | None = None,
+             mask_theta: Array | None = None) -> ArmaFit:
+    """Exact Gaussian MLE of a zero-mean ARMA(p, q) (paper sign convention).
+
+    Starts from :func:`long_ar_start` (or ``init``), projected into the stationary and
+    invertible region (|PACF| <= 0.98), and runs optax L-BFGS with a zoom line search on
+    -log L_p(u) / n until max |gradient| < tol or ``max_iter`` iterations. Masks as in
+    :func:`long_ar_start` (masked entries are returned as 0 with standard error 0).
+    """
+    x = jnp.asarray(x, dtype=float)
+    n = x.shape[0]
+    mp = jnp.ones(p) if mask_phi is None else jnp.asarray(mask_phi, dtype=float)
+    mq = jnp.ones(q) if mask_theta is None else jnp.asarray(mask_theta, dtype=float)
+    mask = jnp.concatenate([mp, mq])
+    if init is None:
+        init = long_ar_start(x, p=p, q=q, mask_phi=mp, mask_theta=mq)
+    up, uq = params_to_unconstrained(init.phi, init.theta, clip=0.98)
+    u0 = jnp.nan_to_num(jnp.concatenate([up, uq])) * mask  # degenerate start -> white noise
+
+    if p + q == 0:
+        u, it, gnorm = u0, jnp.asarray(0), jnp.asarray(0.0)
+    else:
+        u, it, gnorm = _lbfgs(u0, x, p, mask, max_iter, tol)
+    phi, theta = unconstrained_to_params(u[:p] * mp, u[p:] * mq)
+    ll, s2 = arma_profile_loglik(phi, theta, x)
+    se_phi, se_theta = _standard_errors(phi, theta, x, mask)
+    converged = (gnorm < tol) & jnp.isfinite(ll) & jnp.all(jnp.isfinite(u))
+    return ArmaFit(phi, theta, s2, ll, se_phi, se_theta, s2 * jnp.sqrt(2.0 / n),
+                   converged, it, gnorm)
+
+
+def _lbfgs(u0: Array, x: Array, p: int, mask: Array, max_iter: int, tol: float):
+    """optax L-BFGS in a while_loop (vmap runs it until every series has stopped)."""
+    fun = partial(_neg_profile, x=x, p=p, mask=mask)
+    opt = optax.lbfgs()
+    vg = optax.value_and_grad_from_state(fun)
+
+    def gmax(g):
+        g = jnp.max(jnp.abs(g))
+        return jnp.where(jnp.isfinite(g), g, jnp.inf)
+
+    def cond(carry):
+        _, _, it, g = carry
+        return (it < max_iter) & (g >= tol)
+
+    def body(carry):
+        u, state, it, _ = carry
+        value, grad = vg(u, state=state)
+        updates, state = opt.update(grad, state, u, value=value, grad=grad, value_fn=fun)
+        u = optax.apply_updates(u, updates)
+        # the zoom line search stores the gradient at the accepted point in the state
+        return u, state, it + 1, gmax(optax.tree_utils.tree_get(state, "grad"))
+
+    # g = inf: at least one step, whose line search evaluates the gradient at u0 anyway
+    inf = jnp.asarray(jnp.inf)
+    u, _, it, g = lax.while_loop(cond, body, (u0, opt.init(u0), jnp.asarray(0), inf))
+    return u, it, g
+
+
+def _standard_errors(phi: Array, theta: Array, x: Array, mask: Array) -> tuple[Array, Array]:
+    """sqrt(diag(-H^-1)) of the profile log-likelihood in (phi, theta); 0 where masked.
+
+    H by central differences of the exact AD gradient (step 1e-5: truncation ~1e-10
+    relative): it compiles in a fraction of the time of a forward-over-reverse Hessian
+    through the filter's scan, and SEs need no more digits.
+    """
+    p, q = phi.shape[0], theta.shape[0]
+    if p + q == 0:
+        return jnp.zeros(0), jnp.zeros(0)
+    k = p + q
+
+    def g(v):
+        return jax.grad(lambda w: arma_profile_loglik(w[:p], w[p:], x)[0])(v)
+
+    v0 = jnp.concatenate([phi, theta])
+    h = 1e-5
+    E = h * jnp.eye(k)
+    G = jax.vmap(g)(jnp.concatenate([v0 + E, v0 - E]))
+    H = (G[:k] - G[k:]).T / (2 * h)
+    H = 0.5 * (H + H.T)
+    M = mask[:, None] * mask[None, :]
+    Hm = H * M - jnp.diag(1.0 - mask)  # masked coordinates decoupled, unit curvature
+    se = jnp.sqrt(jnp.clip(jnp.diag(jnp.linalg.inv(-Hm)), 0.0)) * mask
+    return se[:p], se[p:]
+
+
+@partial(jax.jit, static_argnames=("p", "q", "max_iter"))
+def fit_arma_batch(X: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7) -> ArmaFit:
+    """:func:`fit_arma` vmapped over the rows of X (many series of equal length), one call."""
+    return jax.vmap(lambda x: fit_arma(x, p=p, q=q, max_iter=max_iter, tol=tol))(X)

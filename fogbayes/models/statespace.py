@@ -1,0 +1,163 @@
+"""State-space form of an ARMA(p, q) process and the Kalman filter / RTS smoother on it.
+
+Harvey's form with r = max(p, q + 1) states, paper-002 sign convention
+(x_t = sum_i phi_i x_{t-i} + a_t - sum_j theta_j a_{t-j}, a_t ~ N(0, sigma2))::
+
+    alpha_{t+1} = T alpha_t + R a_{t+1},     T = [[phi_1, 1, 0, ...],
+    s_t         = alpha_t[0]                      [phi_2, 0, 1, ...],
+    y_t         = s_t + e_t,  e_t ~ N(0, h)       ...
+                                                  [phi_r, 0, ..., 0]]
+                                             R = [1, -theta_1, ..., -theta_{r-1}]
+
+(phi_i = 0 for i > p, theta_j = 0 for j > q). ``h = 0`` is the plain ARMA observed
+exactly; ``h > 0`` adds white measurement noise (used to denoise a drift record).
+The state starts from its stationary law N(0, P0), P0 = T P0 T' + sigma2 R R' (discrete
+Lyapunov equation, solved exactly through (I - T (x) T) vec P0 = vec Q).
+
+Everything here is pure JAX: jit-, grad- and vmap-able, loops are ``lax.scan``.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jax import lax
+
+Array = jax.Array
+
+
+class ArmaStateSpace(NamedTuple):
+    """Transition ``T`` (r, r), selection ``R`` (r,) and innovation variance ``sigma2``."""
+
+    T: Array
+    R: Array
+    sigma2: Array
+
+
+class FilterResult(NamedTuple):
+    """Kalman filter output for n observations and r states.
+
+    pred_mean (n, r), pred_cov (n, r, r): alpha_t | y_1..y_{t-1};
+    filt_mean (n, r), filt_cov (n, r, r): alpha_t | y_1..y_t;
+    innov (n,) v_t = y_t - E[y_t | past], innov_var (n,) F_t; loglik: sum of log N(v_t; 0, F_t).
+    """
+
+    pred_mean: Array
+    pred_cov: Array
+    filt_mean: Array
+    filt_cov: Array
+    innov: Array
+    innov_var: Array
+    loglik: Array
+
+
+class SmootherResult(NamedTuple):
+    """RTS smoother output: alpha_t | y_1..y_n, mean (n, r) and covariance (n, r, r)."""
+
+    mean: Array
+    cov: Array
+
+
+def state_dim(p: int, q: int) -> int:
+    """r = max(p, q + 1), the number of states of Harvey's form."""
+    return max(p, q + 1)
+
+
+def arma_state_space(phi: Array, theta: Array, sigma2=1.0) -> ArmaStateSpace:
+    """Build (T, R, sigma2) for ARMA(p, q) in the paper's sign convention (see module doc)."""
+    phi = jnp.atleast_1d(jnp.asarray(phi, dtype=float))
+    theta = jnp.atleast_1d(jnp.asarray(theta, dtype=float))
+    p, q = phi.shape[-1], theta.shape[-1]
+    r = state_dim(p, q)
+    phi_full = jnp.zeros(r).at[:p].set(phi)
+    R = jnp.zeros(r).at[0].set(1.0).at[1 : q + 1].set(-theta)
+    T = jnp.zeros((r, r)).at[:, 0].set(phi_full).at[jnp.arange(r - 1), jnp.arange(1, r)].set(1.0)
+    return ArmaStateSpace(T, R, jnp.asarray(sigma2, dtype=float))
+
+
+def apply_T(phi_full: Array, M: Array) -> Array:
+    """T @ M for the companion-like T above, without a dense matmul (cheap inside scans).
+
+    Row i of T M is phi_i M[0] + M[i + 1] (M[r] = 0).
+    """
+    shifted = jnp.concatenate([M[1:], jnp.zeros_like(M[:1])], axis=0)
+    lead = phi_full.reshape((-1,) + (1,) * (M.ndim - 1))
+    return lead * M[0] + shifted
+
+
+def stationary_cov(T: Array, Q: Array) -> Array:
+    """Solve the discrete Lyapunov equation P = T P T' + Q exactly (vec/Kronecker form).
+
+    r is small (<= 4 for the paper's models), so the r^2 x r^2 solve is cheap and, unlike
+    a doubling iteration, exact and smoothly differentiable. Non-stationary T gives a
+    singular or indefinite system: callers keep |PACF| < 1 (see :mod:`fogbayes.models.arma`).
+    """
+    r = T.shape[0]
+    A = jnp.eye(r * r) - jnp.kron(T, T)
+    P = jnp.linalg.solve(A, Q.reshape(-1)).reshape(r, r)
+    return 0.5 * (P + P.T)
+
+
+@partial(jax.jit, static_argnames=("unroll",))
+def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, unroll: int = 8) -> FilterResult:
+    """Kalman filter for y_t = alpha_t[0] + e_t, e_t ~ N(0, obs_var), started stationary.
+
+    v_t = y_t - a_t[0], F_t = P_t[0,0] + h, K_t = P_t[:, 0] / F_t,
+    a_t|t = a_t + K_t v_t, P_t|t = P_t - K_t P_t[0, :],
+    a_{t+1} = T a_t|t, P_{t+1} = T P_t|t T' + sigma2 R R'.
+    """
+    T, R, sigma2 = ss
+    phi_full = T[:, 0]
+    Q = sigma2 * jnp.outer(R, R)
+    P0 = stationary_cov(T, Q)
+    h = jnp.asarray(obs_var, dtype=float)
+
+    def step(carry, yt):
+        a, P = carry
+        F = P[0, 0] + h
+        v = yt - a[0]
+        k = P[:, 0] / F
+        af = a + k * v
+        Pf = P - jnp.outer(k, P[0])
+        Pf = 0.5 * (Pf + Pf.T)
+        an = apply_T(phi_full, af)
+        Pn = apply_T(phi_full, apply_T(phi_full, Pf).T) + Q
+        ll = -0.5 * (jnp.log(2 * jnp.pi * F) + v * v / F)
+        return (an, Pn), (a, P, af, Pf, v, F, ll)
+
+    a0 = jnp.zeros(T.shape[0])
+    _, (a, P, af, Pf, v, F, ll) = lax.scan(step, (a0, P0), jnp.asarray(y, dtype=float),
+                                           unroll=unroll)
+    return FilterResult(a, P, af, Pf, v, F, jnp.sum(ll))
+
+
+@partial(jax.jit, static_argnames=("unroll",))
+def rts_smoother(ss: ArmaStateSpace, filt: FilterResult, *, unroll: int = 8) -> SmootherResult:
+    """Rauch-Tung-Striebel smoother, backwards from alpha_n | y_1..y_n.
+
+    J_t = P_t|t T' P_{t+1}^{-1}, m_t = a_t|t + J_t (m_{t+1} - a_{t+1}),
+    S_t = P_t|t + J_t (S_{t+1} - P_{t+1}) J_t'.
+    P_{t+1} can be singular (a pure AR state is exactly known after p steps), so the
+    gain uses a pseudo-inverse solve; the smoothed moments are unique regardless.
+    """
+    phi_full = ss.T[:, 0]
+
+    def step(carry, inp):
+        m_next, S_next = carry
+        af, Pf, a_next, P_next = inp
+        C = apply_T(phi_full, Pf).T  # P_t|t T'
+        J = C @ jnp.linalg.pinv(P_next, hermitian=True, rtol=1e-12)
+        m = af + J @ (m_next - a_next)
+        S = Pf + J @ (S_next - P_next) @ J.T
+        S = 0.5 * (S + S.T)
+        return (m, S), (m, S)
+
+    last = (filt.filt_mean[-1], filt.filt_cov[-1])
+    inputs = (filt.filt_mean[:-1], filt.filt_cov[:-1], filt.pred_mean[1:], filt.pred_cov[1:])
+    _, (m, S) = lax.scan(step, last, inputs, reverse=True, unroll=unroll)
+    mean = jnp.concatenate([m, last[0][None]], axis=0)
+    cov = jnp.concatenate([S, last[1][None]], axis=0)
+    return SmootherResult(mean, cov)

@@ -1,0 +1,96 @@
+"""Kalman filter / RTS smoother, one-step prediction and denoising vs dense Gaussian algebra."""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy import linalg
+
+from fogbayes.errors import ArgumentError
+from fogbayes.models.arma_filter import (
+    arma_spectrum,
+    canonical_noise_var,
+    denoise,
+    one_step_prediction,
+    signal_model,
+)
+from fogbayes.models.statespace import arma_state_space, kalman_filter, rts_smoother
+
+sm_proc = pytest.importorskip("statsmodels.tsa.arima_process")
+sm_arima = pytest.importorskip("statsmodels.tsa.arima.model")
+
+MODELS = [([0.6], [], 1.0), ([-0.2699, -0.002968], [0.277], 1.75e-7), ([0.5, -0.3], [0.4], 2.0),
+          ([0.9], [0.5], 1.0)]
+
+
+def _acov(phi, theta, s2, n):
+    return sm_proc.arma_acovf(np.r_[1, -np.asarray(phi)], np.r_[1, -np.asarray(theta)], nobs=n,
+                              sigma2=s2)
+
+
+def _sim(phi, theta, s2, n, seed):
+    return sm_proc.arma_generate_sample(np.r_[1, -np.asarray(phi)], np.r_[1, -np.asarray(theta)],
+                                        n, scale=np.sqrt(s2),
+                                        distrvs=np.random.default_rng(seed).standard_normal)
+
+
+@pytest.mark.parametrize("phi,theta,s2", MODELS)
+def test_canonical_decomposition_reproduces_the_autocovariance(phi, theta, s2):
+    """acov(signal) + h delta_k = acov(x), with statsmodels' ARMA autocovariances."""
+    h = canonical_noise_var(phi, theta, s2)
+    w = np.linspace(0, np.pi, 4097)
+    assert h == pytest.approx(arma_spectrum(phi, theta, s2, w).min(), rel=1e-6)
+    sp, sth, ss2 = signal_model(phi, theta, s2, h)
+    gs = _acov(sp, sth, ss2, 30)
+    gx = _acov(phi, theta, s2, 30)
+    np.testing.assert_allclose(gs + h * (np.arange(30) == 0), gx, atol=1e-9 * gx[0])
+
+
+@pytest.mark.parametrize("phi,theta,s2", MODELS)
+def test_filter_and_smoother_equal_dense_conditioning(phi, theta, s2):
+    n = 60
+    x = _sim(phi, theta, s2, n, 4)
+    d = denoise(phi, theta, s2, x)
+    gs = _acov(d.signal_phi, d.signal_theta, d.signal_sigma2, n)
+    Ss, h = linalg.toeplitz(gs), d.noise_var
+    smooth = Ss @ np.linalg.solve(Ss + h * np.eye(n), x)  # E[s | x_1..x_n]
+    filt = np.array([Ss[t, : t + 1] @ np.linalg.solve(Ss[: t + 1, : t + 1] + h * np.eye(t + 1),
+                                                      x[: t + 1]) for t in range(n)])
+    scale = np.abs(smooth).max()
+    # exact algorithms both; the RTS gain uses a pseudo-inverse of a near-singular
+    # predicted covariance (unit-circle MA root of the canonical signal): <= 1e-9 measured
+    np.testing.assert_allclose(d.smoothed, smooth, atol=1e-8 * scale)
+    np.testing.assert_allclose(d.filtered, filt, atol=1e-10 * scale)
+    np.testing.assert_allclose(d.noise + d.smoothed, x, rtol=1e-12)
+
+
+def test_smoothed_state_covariance_equals_dense_posterior():
+    phi, theta, s2, h, n = [0.7], [0.2], 1.0, 0.5, 40
+    x = _sim(phi, theta, s2, n, 8) + np.random.default_rng(9).normal(0, np.sqrt(h), n)
+    ss = arma_state_space(jnp.array(phi), jnp.array(theta), s2)
+    sm = rts_smoother(ss, kalman_filter(ss, jnp.array(x), obs_var=h))
+    S = linalg.toeplitz(_acov(phi, theta, s2, n))
+    post = S - S @ np.linalg.solve(S + h * np.eye(n), S)
+    np.testing.assert_allclose(np.asarray(sm.cov[:, 0, 0]), np.diag(post), rtol=1e-9)
+
+
+def test_one_step_prediction_equals_statsmodels():
+    phi, theta, s2 = [0.5, -0.3], [0.4], 2.0
+    x = _sim(phi, theta, s2, 300, 2)
+    one = one_step_prediction(np.array(phi), np.array(theta), s2, x)
+    res = sm_arima.ARIMA(x, order=(2, 0, 1), trend="n").filter(np.r_[phi, -np.array(theta), s2])
+    # same exact Kalman recursion; statsmodels stops updating P once converged (~1e-12)
+    np.testing.assert_allclose(one.prediction, res.predict(), atol=1e-9)
+    np.testing.assert_allclose(one.innovation_var, res.filter_results.forecasts_error_cov[0, 0],
+                               rtol=1e-9)
+    # standardised residuals have variance sigma2 and are (nearly) white
+    assert np.var(one.residual) == pytest.approx(s2, rel=0.2)  # n = 300: sd of var ~ 8 %
+
+
+def test_denoise_rejects_impossible_noise_variance():
+    with pytest.raises(ArgumentError, match="noise_var"):
+        denoise([0.6], [], 1.0, np.zeros(20), noise_var=10.0)
+    # white noise model: everything is noise, the signal is zero
+    d = denoise([], [], 1.0, np.ones(5))
+    assert np.all(d.smoothed == 0.0) and np.all(d.noise == 1.0)
