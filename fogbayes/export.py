@@ -1,0 +1,114 @@
+"""Coefficient export: a JSON document per model, and PX4 thermal-compensation parameters.
+
+The JSON document keeps the scaled-basis coefficients (what the compensator uses, exact),
+their covariance, and the raw coefficients in powers of the covariates (the papers' form,
+for display) with standard errors; :func:`basis_from_dict` rebuilds the basis.
+
+PX4 (``TC_G<i>_*`` parameters, rad/s): the firmware corrects a gyro axis ``a`` as::
+
+    dT     = clamp(T, TC_G<i>_TMIN, TC_G<i>_TMAX) - TC_G<i>_TREF
+    offset = X0_a + X1_a dT + X2_a dT^2 + X3_a dT^3            (parameters TC_G<i>_X<k>_<a>)
+    rate   = raw_rate - offset
+
+so only a cubic in one temperature fits (no dT/dt term: the firmware has no input for it).
+:func:`px4_gyro_parameters` rebases ``bias-t`` polynomials (order <= 3, deg/h) about TREF
+and converts them to rad/s; a ``thermal`` model raises an error that says so.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .errors import FogbayesError
+from .models.polynomial import PolyBasis, rebase_matrix, to_raw
+
+DEG_H_TO_RAD_S = math.pi / 180.0 / 3600.0
+
+
+class ExportError(FogbayesError):
+    """The model cannot be written in the requested format."""
+
+
+def basis_to_dict(basis: PolyBasis) -> dict:
+    return {"covariates": list(basis.names), "terms": basis.labels(),
+            "exponents": [list(e) for e in basis.terms],
+            "centre": list(basis.centre), "scale": list(basis.scale)}
+
+
+def basis_from_dict(d: dict, *, source: str | None = None) -> PolyBasis:
+    """Inverse of :func:`basis_to_dict` (raises a FogbayesError on a malformed document)."""
+    try:
+        return PolyBasis(tuple(d["covariates"]), tuple(tuple(int(x) for x in e) for e in d["exponents"]),
+                         tuple(float(x) for x in d["centre"]), tuple(float(x) for x in d["scale"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ExportError(f"the fit document's basis is malformed ({exc!r})", file=source,
+                          column="params.basis",
+                          fix="pass a document written by 'fogbayes fit'") from None
+
+
+def coefficient_document(basis: PolyBasis, coef, cov=None, *, units: dict | None = None,
+                         valid_range: dict | None = None) -> dict:
+    """JSON-able coefficients: scaled (exact) and raw (powers of the covariates, origin 0)."""
+    coef = np.asarray(coef, dtype=float)
+    doc = {"basis": basis_to_dict(basis), "coef": coef.tolist()}
+    if cov is not None:
+        cov = np.asarray(cov, dtype=float)
+        raw, raw_cov = to_raw(coef, basis, cov)
+        doc.update(covariance=cov.tolist(), stderr=np.sqrt(np.diag(cov)).tolist())
+        doc["raw"] = {"terms": basis.labels(), "coef": raw.tolist(),
+                      "stderr": np.sqrt(np.clip(np.diag(raw_cov), 0, None)).tolist()}
+    else:
+        doc["raw"] = {"terms": basis.labels(), "coef": to_raw(coef, basis).tolist()}
+    doc["raw"]["form"] = "sum_k coef_k * prod_c covariate_c ** exponent_kc (origin 0)"
+    if units:
+        doc["units"] = dict(units)
+    if valid_range:
+        doc["valid_range"] = {k: [float(v[0]), float(v[1])] for k, v in valid_range.items()}
+    return doc
+
+
+def px4_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, gyro_index: int = 0,
+                        device_id: int = 0, t_ref: float | None = None,
+                        t_range: tuple[float, float] | None = None) -> dict:
+    """PX4 ``TC_G<i>_*`` parameters from one ``bias-t`` model (deg/h) per axis (x, y, z).
+
+    ``t_ref`` defaults to the middle of ``t_range``, which defaults to the temperature span
+    the fits were made on (the bases' ``centre +- scale``): outside it PX4 clamps.
+    """
+    if not 1 <= len(axes) <= 3:
+        raise ExportError(f"PX4 takes 1 to 3 gyro axes, got {len(axes)}",
+                          fix="pass the x, y, z fits in that order")
+    for a, (basis, _) in enumerate(axes):
+        if basis.names != ("T",) or max(e[0] for e in basis.terms) > 3:
+            raise ExportError(
+                f"axis {a}: PX4 compensates with a cubic in temperature only, the model has "
+                f"terms {basis.labels()}", column="model",
+                fix="fit '--model bias-t --order 3' (or lower) for PX4 export")
+    if t_range is None:
+        lo = min(b.centre[0] - b.scale[0] for b, _ in axes)
+        hi = max(b.centre[0] + b.scale[0] for b, _ in axes)
+        t_range = (lo, hi)
+    t_ref = 0.5 * (t_range[0] + t_range[1]) if t_ref is None else float(t_ref)
+    g = f"TC_G{gyro_index}_"
+    out: dict = {"TC_G_ENABLE": 1, g + "ID": int(device_id), g + "TREF": t_ref,
+                 g + "TMIN": float(t_range[0]), g + "TMAX": float(t_range[1])}
+    for a, (basis, coef) in enumerate(axes):
+        about_ref = rebase_matrix(basis, origin=[t_ref]) @ np.asarray(coef, dtype=float)
+        for k in range(4):
+            v = about_ref[basis.terms.index((k,))] if (k,) in basis.terms else 0.0
+            out[f"{g}X{k}_{a}"] = float(v * DEG_H_TO_RAD_S)
+    return out
+
+
+def px4_param_file(params: dict, *, vehicle_id: int = 1, component_id: int = 1) -> str:
+    """QGroundControl ``.params`` text: ``vehicle component NAME value type`` (9 = float, 6 = int)."""
+    lines = ["# Onboard parameters for Vehicle 1", "#",
+             "# Vehicle-Id Component-Id Name Value Type"]
+    for name, value in params.items():
+        kind = 6 if isinstance(value, int) else 9
+        text = str(value) if kind == 6 else f"{value:.9g}"
+        lines.append(f"{vehicle_id}\t{component_id}\t{name}\t{text}\t{kind}")
+    return "\n".join(lines) + "\n"

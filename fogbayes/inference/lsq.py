@@ -1,0 +1,221 @@
+"""Least squares: closed form (QR) for linear models, optax L-BFGS for the general case.
+
+Weighted linear least squares, ``min_b sum_i w_i (y_i - X_i b)^2``, solved by a QR
+factorisation of the row-scaled design ``sqrt(w) X = Q R``::
+
+    b_hat = R^{-1} Q^T sqrt(w) y
+    s^2   = sum_i w_i r_i^2 / (n - p)                   (residual variance, dof = n - p)
+    Cov   = s^2 (R^T R)^{-1} = s^2 R^{-1} R^{-T}
+
+(QR, not the normal equations: the condition number is that of X, not its square.) The
+covariance assumes independent errors; for coloured gyro noise use
+:func:`fogbayes.inference.bayes.fit_linear_bayes` with an AR noise model.
+
+The optax path minimises any smooth loss with L-BFGS inside one ``lax.while_loop``
+(:func:`minimize`); :func:`fit_nonlinear` applies it to a residual function and returns
+the Gauss-Newton covariance ``s^2 (J^T J)^{-1}``. For a linear model both paths must
+agree (:func:`lstsq_optax` is that check, and the general path for users who add a
+penalty).
+
+Everything is jit- and vmap-able (a batch of sensors is ``jax.vmap(lstsq)``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import optax
+from jax.flatten_util import ravel_pytree
+from jax.scipy.linalg import solve_triangular
+
+Array = jax.Array
+
+
+class FitResult(NamedTuple):
+    """Result of a least-squares fit.
+
+    Attributes:
+        params: estimated parameters (p,) (a pytree for :func:`fit_nonlinear`).
+        covariance: (p, p) parameter covariance (flattened-parameter order).
+        stderr: (p,) standard errors, sqrt(diag(covariance)).
+        residual: (n,) y - fitted.
+        converged: False for a rank-deficient design or an optimiser that hit max_iter.
+        n_iter: optimiser iterations (0 for the closed form).
+        loss: 0.5 * weighted residual sum of squares.
+        sigma2: residual variance s^2 = wRSS / (n - p).
+        dof: n - p.
+    """
+
+    params: Any
+    covariance: Array
+    stderr: Array
+    residual: Array
+    converged: Array
+    n_iter: Array
+    loss: Array
+    sigma2: Array
+    dof: Array
+
+
+def _row_weights(y: Array, weights: Array | None) -> Array:
+    return jnp.ones_like(y) if weights is None else jnp.asarray(weights, y.dtype)
+
+
+def lstsq(X: Array, y: Array, weights: Array | None = None, *, rcond: float = 1e-10) -> FitResult:
+    """Closed-form weighted least squares by QR (see module docstring).
+
+    Args:
+        X: (n, p) design matrix (use a centred, scaled basis).
+        y: (n,) observations.
+        weights: (n,) non-negative weights (e.g. samples per block average), or None.
+        rcond: the design counts as rank deficient when ``min |R_ii| < rcond * max |R_ii|``;
+            it then gets the minimum-norm solution and ``converged=False``.
+
+    Example:
+        >>> import jax.numpy as jnp
+        >>> X = jnp.stack([jnp.ones(4), jnp.arange(4.0)], 1)
+        >>> fit = lstsq(X, 1.0 + 2.0 * jnp.arange(4.0))
+        >>> [round(float(v), 9) for v in fit.params]
+        [1.0, 2.0]
+    """
+    X, y = jnp.asarray(X, float), jnp.asarray(y, float)
+    w = _row_weights(y, weights)
+    sw = jnp.sqrt(w)
+    Q, R = jnp.linalg.qr(X * sw[:, None])
+    n, p = X.shape
+    d = jnp.abs(jnp.diag(R))
+    full_rank = jnp.min(d) > rcond * jnp.max(d)
+    eye = jnp.eye(p, dtype=X.dtype)
+    # full rank: triangular solves; otherwise the minimum-norm (pseudo-inverse) solution,
+    # finite but not identified -- reported through ``converged=False``
+    Rinv = jax.lax.cond(full_rank, lambda R: solve_triangular(R, eye, lower=False),
+                        lambda R: jnp.linalg.pinv(R, rtol=rcond), R)
+    beta = Rinv @ (Q.T @ (y * sw))
+    resid = y - X @ beta
+    dof = jnp.asarray(n - p, float)
+    wrss = jnp.sum(w * resid**2)
+    s2 = wrss / jnp.maximum(dof, 1.0)
+    cov = s2 * Rinv @ Rinv.T
+    ok = full_rank & (dof > 0) & jnp.all(jnp.isfinite(beta))
+    return FitResult(beta, cov, jnp.sqrt(jnp.diag(cov)), resid, ok, jnp.asarray(0),
+                     0.5 * wrss, s2, dof)
+
+
+def lstsq_gram(X: Array, y: Array, weights: Array | None = None, *,
+               rcond: float = 1e-10) -> FitResult:
+    """Weighted least squares by the normal equations (Cholesky of ``G = X^T W X``).
+
+    ``b_hat = G^{-1} X^T W y``, ``Cov = s^2 G^{-1}``. Squaring the condition number is
+    harmless in a centred, scaled basis (cond(X) ~ 1e1 ... 1e2, so cond(G) <= 1e4 and
+    float64 keeps ~12 digits), and the work is one pass over X plus a p x p solve, which
+    batches well: this is the path for ``jax.vmap`` over many sensors on CPU, where a
+    batched QR is slower than a loop (benchmarks/RESULTS_thermal.md). Same result as
+    :func:`lstsq` (tested to 1e-10 relative).
+    """
+    X, y = jnp.asarray(X, float), jnp.asarray(y, float)
+    w = _row_weights(y, weights)
+    n, p = X.shape
+    Xw = X * w[:, None]
+    G = Xw.T @ X
+    L = jnp.linalg.cholesky(G)
+    eye = jnp.eye(p, dtype=X.dtype)
+    Linv = solve_triangular(L, eye, lower=True)
+    Ginv = Linv.T @ Linv
+    beta = Ginv @ (Xw.T @ y)
+    resid = y - X @ beta
+    dof = jnp.asarray(n - p, float)
+    wrss = jnp.sum(w * resid**2)
+    s2 = wrss / jnp.maximum(dof, 1.0)
+    cov = s2 * Ginv
+    d = jnp.abs(jnp.diag(L))  # diag(L) ~ diag(R): same rank test as the QR path
+    ok = (jnp.min(d) > rcond * jnp.max(d)) & (dof > 0) & jnp.all(jnp.isfinite(beta))
+    return FitResult(beta, cov, jnp.sqrt(jnp.abs(jnp.diag(cov))), resid, ok, jnp.asarray(0),
+                     0.5 * wrss, s2, dof)
+
+
+class MinimizeResult(NamedTuple):
+    params: Any
+    loss: Array
+    grad_norm: Array
+    n_iter: Array
+    converged: Array
+
+
+def minimize(loss_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
+             tol: float = 1e-9, memory_size: int = 20) -> MinimizeResult:
+    """Minimise ``loss_fn`` from ``init`` with optax L-BFGS (zoom line search) in one while_loop.
+
+    Stops when the gradient norm falls below ``tol`` (``converged=True``) or after
+    ``max_iter`` iterations (``converged=False``). Scale the problem so that the loss and
+    its gradient are of order one; ``tol`` is absolute.
+    """
+    opt = optax.lbfgs(memory_size=memory_size)
+    value_and_grad = optax.value_and_grad_from_state(loss_fn)
+
+    def step(carry):
+        params, state = carry
+        value, grad = value_and_grad(params, state=state)
+        updates, state = opt.update(grad, state, params, value=value, grad=grad,
+                                    value_fn=loss_fn)
+        return optax.apply_updates(params, updates), state
+
+    def going(carry):
+        _, state = carry
+        k = optax.tree.get(state, "count")
+        g = optax.tree.norm(optax.tree.get(state, "grad"))
+        return (k == 0) | ((k < max_iter) & (g >= tol) & jnp.isfinite(g))
+
+    params, state = jax.lax.while_loop(going, step, (init, opt.init(init)))
+    value, grad = jax.value_and_grad(loss_fn)(params)
+    gnorm = optax.tree.norm(grad)
+    return MinimizeResult(params, value, gnorm, optax.tree.get(state, "count"),
+                          (gnorm < 10 * tol) & jnp.isfinite(value))
+
+
+def fit_nonlinear(residual_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
+                  tol: float = 1e-9) -> FitResult:
+    """Nonlinear least squares ``min 0.5 sum r(theta)^2`` by L-BFGS, Gauss-Newton covariance.
+
+    ``residual_fn(params) -> (n,)`` should already include any weights (``sqrt(w) r``)
+    and be scaled to order one. ``Cov = s^2 (J^T J)^{-1}``, ``J = d r / d theta`` at the
+    optimum, ``s^2 = sum r^2 / (n - p)``.
+    """
+    flat0, unravel = ravel_pytree(init)
+
+    def loss(flat):
+        r = residual_fn(unravel(flat))
+        return 0.5 * jnp.sum(r * r)
+
+    res = minimize(loss, flat0, max_iter=max_iter, tol=tol)
+    r = residual_fn(unravel(res.params))
+    J = jax.jacfwd(lambda f: residual_fn(unravel(f)))(res.params)
+    n, p = J.shape
+    dof = jnp.asarray(n - p, float)
+    s2 = jnp.sum(r * r) / jnp.maximum(dof, 1.0)
+    cov = s2 * jnp.linalg.pinv(J.T @ J)
+    return FitResult(unravel(res.params), cov, jnp.sqrt(jnp.diag(cov)), r, res.converged,
+                     res.n_iter, res.loss, s2, dof)
+
+
+def lstsq_optax(X: Array, y: Array, weights: Array | None = None, *, max_iter: int = 500,
+                tol: float = 1e-10) -> FitResult:
+    """The linear least-squares problem of :func:`lstsq`, solved by the optax path.
+
+    ``y`` is standardised first (so that the loss and ``tol`` are of order one) and the
+    result mapped back; the covariance is the Gauss-Newton one, which for a linear model
+    equals the closed form's ``s^2 (X^T W X)^{-1}``.
+    """
+    X, y = jnp.asarray(X, float), jnp.asarray(y, float)
+    w = _row_weights(y, weights)
+    sw = jnp.sqrt(w)
+    scale = jnp.maximum(jnp.std(y), jnp.finfo(y.dtype).tiny)
+    res = fit_nonlinear(lambda b: sw * (y / scale - X @ b), jnp.zeros(X.shape[1], float),
+                        max_iter=max_iter, tol=tol)
+    beta = res.params * scale
+    resid = y - X @ beta
+    return res._replace(params=beta, residual=resid, covariance=res.covariance * scale**2,
+                        stderr=res.stderr * scale, loss=res.loss * scale**2,
+                        sigma2=res.sigma2 * scale**2)

@@ -1,0 +1,165 @@
+"""Centred and scaled multivariate polynomial bases, and their raw coefficients.
+
+A basis is a set of monomials in ``c`` covariates (temperature, temperature rate, ...),
+each covariate centred and scaled before it is raised to a power::
+
+    z'_c = (z_c - centre_c) / scale_c            (so z' spans about [-1, 1])
+    X[i, k] = prod_c z'_{i,c} ** e_{k,c}         (term k has exponents e_k)
+    f(z) = X(z) @ coef
+
+Fitting in the scaled basis keeps the normal equations well conditioned (the papers' raw
+coefficients span 1e1 ... 1e-12). Raw coefficients, in powers of ``(z - origin)`` for any
+origin (0 for the papers' form, a reference temperature for firmware), are produced only
+for display and export by an exact linear map ``raw = M @ coef`` (binomial expansion of
+each scaled monomial), so that ``cov_raw = M cov M^T`` as well.
+
+The term set must be *downward closed* (with every monomial, all monomials it divides),
+which is what makes the raw form a polynomial in the same terms.
+
+Example:
+    >>> import numpy as np
+    >>> b = make_basis(("T",), ((0,), (1,), (2,)), np.array([[-40.0], [60.0]]))
+    >>> b.centre, b.scale
+    ((10.0,), (50.0,))
+    >>> raw = to_raw(np.array([1.0, 0.0, 1.0]), b)      # 1 + ((T - 10) / 50)^2
+    >>> np.allclose(raw, [1.04, -0.008, 0.0004])
+    True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from math import comb
+from typing import NamedTuple
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ShapeError
+
+
+class PolyBasis(NamedTuple):
+    """Static structure of a polynomial basis (hashable: usable as a jit static argument).
+
+    Attributes:
+        names: covariate names, e.g. ``("T", "dT/dt")``.
+        terms: one exponent tuple per column, e.g. ``((0, 0), (1, 0), (0, 1))``.
+        centre, scale: per covariate, ``z' = (z - centre) / scale``.
+    """
+
+    names: tuple[str, ...]
+    terms: tuple[tuple[int, ...], ...]
+    centre: tuple[float, ...]
+    scale: tuple[float, ...]
+
+    @property
+    def n_terms(self) -> int:
+        return len(self.terms)
+
+    def labels(self) -> list[str]:
+        """Human-readable term names, e.g. ``['1', 'T', 'T^2', 'T*dT/dt']``."""
+        return [term_label(self.names, e) for e in self.terms]
+
+
+def term_label(names: Sequence[str], exponents: Sequence[int]) -> str:
+    parts = [n if e == 1 else f"{n}^{e}" for n, e in zip(names, exponents) if e > 0]
+    return "*".join(parts) or "1"
+
+
+def is_downward_closed(terms: Sequence[tuple[int, ...]]) -> bool:
+    """True when every monomial's divisors are in the set too (needed for :func:`to_raw`)."""
+    have = set(terms)
+    for e in terms:
+        for c, ec in enumerate(e):
+            if ec > 0 and tuple(x - (i == c) for i, x in enumerate(e)) not in have:
+                return False
+    return True
+
+
+def make_basis(names: Sequence[str], terms: Sequence[tuple[int, ...]], z: np.ndarray, *,
+               centre: Sequence[float] | None = None,
+               scale: Sequence[float] | None = None) -> PolyBasis:
+    """A basis whose scaling maps the observed range of each covariate to [-1, 1].
+
+    ``centre`` = mid-range and ``scale`` = half-range (1 where a covariate is constant, so
+    that a zero temperature rate in a pure soak still gives a finite basis).
+    """
+    z = np.asarray(z, dtype=float)
+    if z.ndim == 1:
+        z = z[:, None]
+    names, terms = tuple(names), tuple(tuple(int(x) for x in e) for e in terms)
+    if z.shape[1] != len(names) or any(len(e) != len(names) for e in terms):
+        raise ShapeError(f"{len(names)} covariate names, {z.shape[1]} covariate columns and "
+                         f"terms of lengths {sorted({len(e) for e in terms})} do not match",
+                         fix="give one name and one exponent per covariate column")
+    if not is_downward_closed(terms):
+        raise ShapeError(f"the term set {terms} is not downward closed",
+                         fix="include every lower-order monomial (e.g. T when T^2 is used)")
+    lo, hi = z.min(axis=0), z.max(axis=0)
+    c = (lo + hi) / 2 if centre is None else np.asarray(centre, dtype=float)
+    half = (hi - lo) / 2
+    s = np.where(half > 0, half, 1.0) if scale is None else np.asarray(scale, dtype=float)
+    return PolyBasis(names, terms, tuple(float(v) for v in c), tuple(float(v) for v in s))
+
+
+def design(z, basis: PolyBasis):
+    """Design matrix ``X`` (n, p) of ``basis`` at covariates ``z`` (n, c); jnp, jit/vmap-able.
+
+    Works in the dtype of ``z`` (float32 stays float32): the centring happens before any
+    power is taken, which is what keeps single precision usable.
+    """
+    z = jnp.atleast_2d(jnp.asarray(z).T).T  # (n,) -> (n, 1)
+    zs = (z - jnp.asarray(basis.centre, z.dtype)) / jnp.asarray(basis.scale, z.dtype)
+    cols = []
+    for e in basis.terms:  # static, a handful of terms: unrolled at trace time
+        col = jnp.ones(z.shape[0], z.dtype)
+        for c, ec in enumerate(e):
+            if ec:
+                col = col * zs[:, c] ** ec
+        cols.append(col)
+    return jnp.stack(cols, axis=1)
+
+
+def evaluate(coef, z, basis: PolyBasis):
+    """``f(z) = X(z) @ coef`` for scaled-basis coefficients."""
+    return design(z, basis) @ coef
+
+
+def rebase_matrix(basis: PolyBasis, origin: Sequence[float] | None = None,
+                  unit: Sequence[float] | None = None) -> np.ndarray:
+    """Matrix ``M`` with ``coef_new = M @ coef`` for monomials in ``u_c = (z_c - origin_c) / unit_c``.
+
+    ``origin = 0``, ``unit = 1`` gives the papers' raw coefficients. With
+    ``z' = a u + b`` (``a = unit / scale``, ``b = (origin - centre) / scale``) each factor
+    expands as ``(a u + b)^e = sum_j C(e, j) a^j b^(e-j) u^j``.
+    """
+    nc = len(basis.names)
+    origin = np.zeros(nc) if origin is None else np.asarray(origin, dtype=float)
+    unit = np.ones(nc) if unit is None else np.asarray(unit, dtype=float)
+    a = unit / np.asarray(basis.scale)
+    b = (origin - np.asarray(basis.centre)) / np.asarray(basis.scale)
+    index = {e: k for k, e in enumerate(basis.terms)}
+    M = np.zeros((basis.n_terms, basis.n_terms))
+    for k, e in enumerate(basis.terms):
+        for j in np.ndindex(*(ec + 1 for ec in e)):
+            w = np.prod([comb(ec, jc) * a[c] ** jc * b[c] ** (ec - jc)
+                         for c, (ec, jc) in enumerate(zip(e, j))])
+            M[index[tuple(int(x) for x in j)], k] += w
+    return M
+
+
+def to_raw(coef, basis: PolyBasis, cov=None, *, origin: Sequence[float] | None = None):
+    """Scaled-basis coefficients -> coefficients of ``prod_c (z_c - origin_c)^j_c``.
+
+    Returns the coefficients, or ``(coefficients, covariance)`` when ``cov`` is given.
+    """
+    M = rebase_matrix(basis, origin)
+    raw = M @ np.asarray(coef, dtype=float)
+    if cov is None:
+        return raw
+    return raw, M @ np.asarray(cov, dtype=float) @ M.T
+
+
+def from_raw(raw, basis: PolyBasis, *, origin: Sequence[float] | None = None) -> np.ndarray:
+    """Inverse of :func:`to_raw` (e.g. to load firmware coefficients into a basis)."""
+    return np.linalg.solve(rebase_matrix(basis, origin), np.asarray(raw, dtype=float))

@@ -1,0 +1,32 @@
+"""Workflows: the order of the stages for each model family, one module per family.
+
+``fit_recording(rec, *, model, orders=None, bayes=False, seed=0, **options) -> dict`` and
+``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (DESIGN.md / contracts):
+
+* :mod:`.thermal`   -- ``bias-t`` and ``thermal`` (paper 004)
+* :mod:`.composite` -- ``composite`` (paper 000)
+* :mod:`.allan`     -- ``allan`` (five-term Allan model)
+* :mod:`.arma`      -- ``arma`` (paper 002 drift model; nothing to compensate)
+
+:func:`workflow_for` imports the module of a model name lazily, so that the command line
+and notebooks pay only for the model they use.
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+from ..errors import FogbayesError
+
+#: model name -> workflow module
+MODULES = {"bias-t": "thermal", "thermal": "thermal", "composite": "composite", "allan": "allan",
+           "arma": "arma"}
+
+
+def workflow_for(model: str) -> ModuleType:
+    """The workflow module that fits and compensates ``model``."""
+    if model not in MODULES:
+        raise FogbayesError(f"unknown model '{model}'", column="model",
+                            fix=f"use one of {', '.join(MODULES)}")
+    return importlib.import_module(f".{MODULES[model]}", __name__)
