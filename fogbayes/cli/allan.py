@@ -1,0 +1,75 @@
+"""``fogbayes allan REC --json OUT``: Allan deviation with intervals and the five-term fit.
+
+Thin layer over :func:`fogbayes.workflow.allan.fit_recording`: loads the recording, writes
+the JSON document (canonical units: N deg/sqrt(h), B deg/h, K deg/h^1.5, R deg/h^2,
+Q arcsec and urad, whatever the input unit) and, with ``--plot``, the log-log figure.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import app
+from ._common import REC_ARG, load_recording, progress, say, write_json
+
+_TAUS = ("octave", "decade", "dense", "all")
+
+
+def summary_lines(doc: dict) -> list[str]:
+    """A few lines for people: method, each term with its 90 % interval."""
+    fit = doc["fit"]
+    out = [f"allan: n={doc['n']} fs={doc['fs']:g} Hz, {len(doc['tau'])} taus, "
+           f"fit={fit['method']} converged={fit['converged']}"]
+    for t in ("Q", "N", "B", "K", "R"):
+        e = fit["terms"].get(t)
+        if e is None:
+            continue
+        flag = "" if e.get("present", True) else "  (not supported: upper bound)"
+        urad = (f"  = {e['value_urad']:.4g} urad" if "value_urad" in e else "")
+        out.append(f"  {t} = {e['value']:.4g} [{e['low']:.4g}, {e['high']:.4g}] {e['unit']}"
+                   f"{urad}{flag}")
+    return out
+
+
+@app.command()
+def allan(
+    rec: Path = REC_ARG,
+    json_out: Path = typer.Option(..., "--json", help="Result document to write ('-' = stdout)."),
+    column: str = typer.Option("output", help="Output (rate) column."),
+    time_column: str = typer.Option("time", help="Time column (s)."),
+    output_unit: str = typer.Option(None, help="Unit of the output column (default deg/h)."),
+    scale_factor: float = typer.Option(None, help="Raw units per deg/s for V/mV/Hz outputs."),
+    taus: str = typer.Option("octave", help="Tau grid: octave | decade | dense | all."),
+    per_decade: int = typer.Option(20, help="Points per decade of the dense grid."),
+    bayes: bool = typer.Option(False, "--bayes",
+                               help="NumPyro posterior with term selection (slower)."),
+    seed: int = typer.Option(0, help="Seed of the posterior sampler."),
+    plot: Path = typer.Option(None, "--plot", help="Also write the log-log ADEV figure (PNG/PDF)."),
+):
+    """Allan deviation with 90 % intervals and the five-term noise fit (Q, N, B, K, R).
+
+    Example: fogbayes allan gyro.csv --output-unit deg/s --taus dense --bayes --json av.json
+    """
+    from ..errors import FogbayesError
+    from ..workflow.allan import fit_recording
+
+    if taus not in _TAUS:
+        raise FogbayesError(f"unknown tau grid '{taus}'", column="--taus",
+                            fix=f"use one of {', '.join(_TAUS)}")
+    recording = load_recording(rec, column=column, time_column=time_column,
+                               output_unit=output_unit, scale_factor=scale_factor)
+    with progress("Allan deviation and noise fit" + (" (posterior)" if bayes else "")):
+        doc = fit_recording(recording, model="allan", bayes=bayes, seed=seed, taus=taus,
+                            per_decade=per_decade)
+    write_json(doc, json_out)
+    for line in summary_lines(doc):
+        say(line)
+    if plot is not None:
+        from ..plot.allan import allan_figure
+
+        fig = allan_figure(doc)
+        plot.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(plot, dpi=150)
+        say(f"wrote {plot}")

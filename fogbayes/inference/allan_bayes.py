@@ -1,0 +1,310 @@
+r"""NumPyro posterior of the five-term Allan model, with correlated AVAR estimates.
+
+Likelihood of the octave AVAR estimates :math:`\hat\sigma^2_j` (:mod:`.allan_data`): each is
+:math:`\sigma^2_j(\theta)\,\chi^2_{\nu_j}/\nu_j` marginally, made normal by the Wilson-Hilferty
+cube root :math:`z_j = ((\hat\sigma^2_j/\sigma^2_j)^{1/3} - 1 + v_j)/\sqrt{v_j}`,
+:math:`v_j = 2/(9\nu_j)`, and :math:`z \sim \mathcal N(0, C)` jointly (a Gaussian copula):
+
+.. math::
+
+    \log p(\hat\sigma^2 \mid \theta) = \log \mathcal N(z; 0, C)
+        + \sum_j \log \left|\frac{dz_j}{d\hat\sigma^2_j}\right|.
+
+Both the EDF :math:`\nu_j` and the correlation :math:`C` are computed from the noise mixture
+at :math:`\theta` (:mod:`fogbayes.stats.allan_cov`), so neighbouring taus are not counted as
+independent evidence. Priors: :math:`\theta_p \sim \mathrm{HalfNormal}(3 e^{\ell_p})` with
+:math:`e^{\ell_p}` the value at which term ``p`` alone would explain the measured AVAR where
+it is most visible (a scale set by the data's units, weakly informative: the plausible range
+sits within one prior sd). A prior with finite density at 0 matters for terms the data barely
+resolve: a log-normal prior leaves a long flat tail towards 0 in log space that NUTS explores
+slowly (effective sample sizes of ~100 in 2000 draws); the half-normal's density vanishes
+like :math:`\theta` there.
+
+Model discrepancy: when the fit without it fails a goodness-of-fit check
+(:math:`z^\top C^{-1} z` at the posterior median beyond the 99.9 % point of
+:math:`\chi^2_K`) it is refitted with an independent log-normal discrepancy
+:math:`\delta \sim \mathrm{HalfNormal}(0.05)` per estimate, and the result says so.
+
+Term selection: :func:`select_terms` compares models by PSIS-LOO (ArviZ) over the sequential
+factors :math:`\log p(\hat\sigma^2_j \mid \hat\sigma^2_{<j}, \theta)` of the joint
+likelihood (taus from short to long; they add up to it), so each longer-tau estimate is
+scored as a prediction from the shorter ones; WAIC is reported alongside.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from scipy import stats
+
+from ..models.allan import TERMS, AllanParams, adev
+from .allan_data import AllanFitData, cube_root_normal, model_moments
+from .allan_fit import AllanFit, _estimates, _mask, fit_wls
+
+PRIOR_SCALE = 3.0
+DELTA_SCALE = 0.05
+GOF_LEVEL = 1e-3
+
+
+def _copula(logp, delta, mask, data, obs):
+    mean, nu, corr = model_moments(logp, mask, data, delta)
+    z, log_jac = cube_root_normal(obs, mean, nu)
+    K = z.shape[0]
+    L = jnp.linalg.cholesky(corr + 1e-10 * jnp.eye(K))
+    w = jax.scipy.linalg.solve_triangular(L, z, lower=True)
+    total = (-0.5 * w @ w - jnp.sum(jnp.log(jnp.diag(L))) - 0.5 * K * jnp.log(2 * jnp.pi)
+             + jnp.sum(log_jac))
+    return total, z, log_jac, L
+
+
+def log_likelihood(logp, delta, mask, data: AllanFitData, obs):
+    """Total log-likelihood and its K sequential terms log p(x_j | x_1 .. x_{j-1}).
+
+    With the Cholesky factor L of the copula correlation (taus from short to long), the
+    whitened w = L^-1 z are independent: term j = log N(w_j) - log L_jj + log|dz_j/dx_j|, and
+    the terms add up to the total. Each long-tau estimate is thus scored as a prediction from
+    the shorter ones, which is what tells a K or R term from none; the symmetric leave-one-out
+    conditionals p(x_j | x_-j) do not, because neighbouring taus (correlation ~0.9 under rate
+    random walk) predict each other whatever the model.
+    """
+    total, z, log_jac, L = _copula(logp, delta, mask, data, obs)
+    w = jax.scipy.linalg.solve_triangular(L, z, lower=True)
+    pointwise = -0.5 * w**2 - 0.5 * jnp.log(2 * jnp.pi) - jnp.log(jnp.diag(L)) + log_jac
+    return total, pointwise
+
+
+def _potential_gen(obs, mask, data, *, discrepancy: bool):
+    """Negative log posterior in unconstrained space (``log_delta`` for the discrepancy)."""
+    from jax.scipy.stats import norm
+
+    def potential(z):
+        logp = z["logp"]
+        # half-normal prior on each parameter, sampled as its log (+ the Jacobian log p)
+        scale = PRIOR_SCALE * jnp.exp(jnp.asarray(data.prior_loc))
+        lp = jnp.sum(norm.logpdf(jnp.exp(logp), 0.0, scale) + jnp.log(2.0) + logp)
+        delta = 0.0
+        if discrepancy:  # HalfNormal(DELTA_SCALE) on delta, sampled as log delta
+            delta = jnp.exp(z["log_delta"])
+            lp += norm.logpdf(delta, 0.0, DELTA_SCALE) + jnp.log(2.0) + z["log_delta"]
+        return -(lp + _copula(logp, delta, mask, data, obs)[0])
+
+    return potential
+
+
+@functools.lru_cache(maxsize=8)
+def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
+    """Warmup + sampling of NUTS chains as one jitted, chain-vmapped function.
+
+    Built with NumPyro's functional ``hmc`` API and compiled once per configuration and data
+    shape: the data are arguments, so fitting another record of the same length reuses it.
+    """
+    from numpyro.infer.hmc import hmc
+
+    init_kernel, sample_kernel = hmc(
+        potential_fn_gen=functools.partial(_potential_gen, discrepancy=discrepancy),
+        algo="NUTS")
+
+    def chain(key, z0, obs, mask, data):
+        args = (obs, mask, data)
+        state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.9,
+                            model_args=args, rng_key=key)
+
+        def step(st, _):
+            st = sample_kernel(st, model_args=args)
+            return st, (st.z, st.diverging)
+
+        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
+        return jax.tree.map(lambda a: a[num_warmup:], zs), div[num_warmup:]
+
+    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None)))
+
+
+class AllanPosterior(NamedTuple):
+    """Posterior of the five-term model: summary fit, draws and what model checking needs."""
+
+    fit: AllanFit           # method "bayes": medians and 90 % credible intervals
+    draws: np.ndarray       # (chains * draws, 5) canonical parameters (0 for absent terms)
+    log_lik: np.ndarray     # (chains, draws, K) pointwise LOO conditional log densities
+    diagnostics: dict       # r_hat, ess, divergences, goodness of fit, discrepancy used
+    mask: np.ndarray        # (5,) terms in the model
+    data: AllanFitData
+
+
+def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 400,
+              num_samples: int = 600, num_chains: int = 2,
+              discrepancy: str | bool = "auto") -> AllanPosterior:
+    """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring."""
+    mask = _mask(terms)
+    wls = fit_wls(data, terms)
+    post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains,
+                discrepancy is True)
+    if discrepancy == "auto" and post.diagnostics["gof_p"] < GOF_LEVEL:
+        post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains, True)
+    return post
+
+
+def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discrepancy):
+    from numpyro.diagnostics import summary
+
+    init = np.clip(init_logp, data.prior_loc - 12.0, data.prior_loc + np.log(3 * PRIOR_SCALE))
+    rng = np.random.default_rng(seed)  # chains start at jittered copies of the GLS estimate
+    z0 = {"logp": jnp.asarray(init + 0.01 * rng.standard_normal((num_chains, 5)))}
+    if discrepancy:
+        z0["log_delta"] = jnp.full(num_chains, np.log(0.01))
+    obs, jmask = jnp.asarray(data.avar), jnp.asarray(mask)
+    keys = jax.random.split(jax.random.PRNGKey(seed), num_chains)
+    zs, div = _sampler(num_warmup, num_samples, bool(discrepancy))(keys, z0, obs, jmask, data)
+    samples = {"logp": zs["logp"]}
+    logp = np.asarray(zs["logp"])  # (chains, draws, 5)
+    delta = np.exp(np.asarray(zs["log_delta"])) if discrepancy else np.zeros(logp.shape[:2])
+    ll_fn = jax.jit(jax.vmap(jax.vmap(lambda lp, d: log_likelihood(lp, d, jmask, data, obs)[1])))
+    log_lik = np.asarray(ll_fn(jnp.asarray(logp), jnp.asarray(delta)))
+    diag = summary(samples, group_by_chain=True)["logp"]
+    on = mask > 0
+    draws = np.exp(logp.reshape(-1, 5)) * mask
+    med = np.median(draws, axis=0)
+    lo, hi = np.quantile(draws, [0.05, 0.95], axis=0)
+    gof = _goodness_of_fit(np.log(med[on]), mask, data, obs, float(np.median(delta)))
+    divergences = int(np.asarray(div).sum())
+    r_hat = float(np.max(np.asarray(diag["r_hat"])[on]))
+    ess = float(np.min(np.asarray(diag["n_eff"])[on]))
+    converged = bool(r_hat < 1.01 and ess > 200 and divergences == 0)
+    diagnostics = {"r_hat_max": r_hat, "ess_min": ess, "divergences": divergences,
+                   "gof_stat": gof[0], "gof_p": gof[1], "discrepancy": bool(discrepancy),
+                   "delta_median": float(np.median(delta)), "converged": converged}
+    fit = AllanFit("bayes", _estimates(med, lo, hi, mask), AllanParams(*med), converged,
+                   diagnostics)
+    return AllanPosterior(fit, draws, log_lik, diagnostics, mask, data)
+
+
+def _goodness_of_fit(logp_on, mask, data, obs, delta):
+    logp = np.array(data.prior_loc, dtype=float)
+    logp[mask > 0] = logp_on
+    mean, nu, corr = model_moments(jnp.asarray(logp), jnp.asarray(mask), data, delta)
+    z, _ = cube_root_normal(obs, mean, nu)
+    stat = float(z @ jnp.linalg.solve(corr, z))
+    return stat, float(stats.chi2.sf(stat, len(obs)))
+
+
+def posterior_band(post: AllanPosterior, tau, *, ci: float = 0.9, max_draws: int = 1000):
+    """Quantiles (low, median, high) of the model ADEV sigma(tau) over the posterior draws."""
+    tau = np.asarray(tau, dtype=float)
+    step = max(1, post.draws.shape[0] // max_draws)
+    curves = np.asarray(jax.vmap(lambda p: adev(tuple(p), tau))(jnp.asarray(post.draws[::step])))
+    return tuple(np.quantile(curves, [0.5 - ci / 2, 0.5, 0.5 + ci / 2], axis=0))
+
+
+def predictive_band(post: AllanPosterior, *, ci: float = 0.9, seed: int = 0):
+    """Posterior-predictive interval of a new ADEV estimate at each fitted tau."""
+    rng = np.random.default_rng(seed)
+    logp = np.log(np.where(post.mask > 0, np.maximum(post.draws, 1e-300), 1.0))
+    sel = logp[:: max(1, logp.shape[0] // 1000)]
+    mean, nu, _ = jax.vmap(lambda lp: model_moments(lp, jnp.asarray(post.mask), post.data))(
+        jnp.asarray(sel))
+    mean, nu = np.asarray(mean), np.asarray(nu)
+    v = 2.0 / (9.0 * nu)
+    z = rng.standard_normal(mean.shape)
+    sims = np.sqrt(mean * np.clip(1 - v + np.sqrt(v) * z, 0, None) ** 3)
+    return tuple(np.quantile(sims, [0.5 - ci / 2, 0.5 + ci / 2], axis=0))
+
+
+class TermSelection(NamedTuple):
+    """Which terms the data support, by PSIS-LOO (and WAIC) against drop-one models."""
+
+    present: tuple          # supported terms
+    table: list             # one row per comparison: elpd differences, their se, decision
+    full: AllanPosterior    # the posterior of the model with every candidate term
+    selected: AllanPosterior  # the posterior of the model with the supported terms
+
+
+#: a term is dropped when removing it costs less than this elpd (LOO); 2 elpd is an evidence
+#: ratio of ~7. Dropping a real term biases the others while keeping a superfluous one only
+#: widens intervals, so the bar is lower than the ~4 at which LOO differences become
+#: clearly distinguishable (Sivula, Magnusson & Vehtari 2022).
+ELPD_THRESHOLD = 2.0
+#: terms whose posterior 5 % quantile explains this share of the AVAR somewhere are kept
+#: without a comparison (their LOO difference would be hundreds)
+OBVIOUS_SHARE = 0.25
+
+
+def _loo(post: AllanPosterior):
+    import arviz as az
+
+    idata = az.from_dict(posterior={"logp": post.draws.reshape(post.log_lik.shape[:2] + (5,))},
+                         log_likelihood={"avar": post.log_lik})
+    return az.loo(idata, pointwise=True), az.waic(idata, pointwise=True)
+
+
+def _obvious(post: AllanPosterior) -> np.ndarray:
+    from ..models.allan import term_avar
+
+    low = np.quantile(post.draws, 0.05, axis=0)
+    share = np.asarray(term_avar(tuple(low), post.data.tau)) / post.data.avar[None, :]
+    return share.max(axis=1) >= OBVIOUS_SHARE
+
+
+def _compare(post_a: AllanPosterior, post_b: AllanPosterior) -> dict:
+    """elpd(a) - elpd(b) by PSIS-LOO (pointwise se) and WAIC."""
+    loo_a, waic_a = _loo(post_a)
+    loo_b, waic_b = _loo(post_b)
+    diff = np.asarray(loo_a.loo_i) - np.asarray(loo_b.loo_i)
+    return {"d_elpd_loo": float(diff.sum()), "se": float(np.sqrt(diff.size * np.var(diff))),
+            "d_elpd_waic": float(waic_a.elpd_waic - waic_b.elpd_waic),
+            "pareto_k_max": float(max(np.max(loo_a.pareto_k), np.max(loo_b.pareto_k)))}
+
+
+def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, **kw) -> TermSelection:
+    """Backward elimination by PSIS-LOO.
+
+    From the model with all ``terms``: fit each model that lacks one candidate term, drop the
+    term whose removal costs least if that cost ``elpd(with) - elpd(without)`` is below
+    ELPD_THRESHOLD, and repeat from the reduced model. One term at a time matters: K and R
+    can stand in for each other, so each alone looks unnecessary while one of them is needed.
+    Terms that are obviously present (OBVIOUS_SHARE) are not candidates.
+    """
+    import warnings
+
+    current = [t for t in TERMS if t in terms]
+    post = fit_bayes(data, current, seed=seed, **kw)
+    full, table = post, []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # Pareto-k / WAIC variance warnings: k is reported
+        while True:
+            obvious = _obvious(post)
+            cands = [t for t in current if not obvious[TERMS.index(t)]]
+            if not cands:
+                break
+            trials = {t: fit_bayes(data, [u for u in current if u != t], seed=seed, **kw)
+                      for t in cands}
+            costs = {t: _compare(post, trials[t]) for t in cands}
+            worst = min(cands, key=lambda t: costs[t]["d_elpd_loo"])
+            for t in cands:
+                table.append({"term": t, "model": "+".join(current), **costs[t]})
+            if costs[worst]["d_elpd_loo"] >= ELPD_THRESHOLD:
+                break
+            current.remove(worst)
+            table.append({"term": worst, "model": "+".join(current + [worst]),
+                          "decided": f"dropped (d_elpd_loo < {ELPD_THRESHOLD:g})"})
+            post = trials[worst]
+    return TermSelection(tuple(current), table, full, post)
+
+
+def reported_terms(sel: TermSelection) -> dict:
+    """What a selection reports per term: the selected model's median and 90 % interval for a
+    present term; for an absent term value 0 and the interval [0, 95 % quantile of the full
+    model] (an upper bound). Each :class:`~.allan_fit.TermEstimate` is paired with a flag."""
+    from ..models.allan import UNITS
+    from .allan_fit import TermEstimate
+
+    out = {}
+    full_hi = np.quantile(sel.full.draws, 0.95, axis=0)
+    for i, t in enumerate(TERMS):
+        if t in sel.present:
+            out[t] = (sel.selected.fit.terms[t], True)
+        elif sel.full.mask[i] > 0:
+            out[t] = (TermEstimate(0.0, 0.0, float(full_hi[i]), UNITS[t]), False)
+    return out

@@ -1,0 +1,78 @@
+r"""IEEE Std 952 slope readouts of the noise terms from an ADEV curve (for comparison).
+
+The classic graphical method: find where the log-log ADEV curve has the slope of a term, lay
+a line of exactly that slope through the curve there, and read the coefficient off the line
+(sigma in deg/h, tau in s):
+
+* Q: slope -1 line, :math:`Q = \sigma(\tau)\,\tau/\sqrt3` (its value at tau = sqrt(3) s);
+* N: slope -1/2 line at tau = 1 h, :math:`N = \sigma(\tau)\sqrt{\tau/3600}` deg/sqrt(h);
+* B: the flat minimum, :math:`B = \min\sigma/0.664`;
+* K: slope +1/2 line at tau = 3 h, :math:`K = \sigma(\tau)\sqrt{3\cdot3600/\tau}` deg/h^1.5;
+* R: slope +1 line, :math:`R = 3600\sqrt2\,\sigma(\tau)/\tau` deg/h^2.
+
+The readout point is the tau whose local slope (centred difference over the neighbouring
+octaves) is closest to the term's slope, searched where an engineer would look: Q and N left
+of the ADEV minimum, K and R right of it, never at the longest tau (its estimate has a few
+degrees of freedom and its slope is one-sided); a term is not read (``None``) when no local
+slope there comes within 0.25 of it. The interval is the chi-square interval of sigma at that point
+carried through the same formula (it ignores the bias from the other terms, which is the
+method's main error).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..models.allan import BI_FACTOR, SLOPES, TERMS, UNITS
+from .allan_fit import TermEstimate
+
+_TOLERANCE = 0.25
+
+
+def local_slopes(tau: np.ndarray, dev: np.ndarray) -> np.ndarray:
+    """d log sigma / d log tau by centred differences (one-sided at the ends)."""
+    return np.gradient(np.log(dev), np.log(tau))
+
+
+def _coefficient(term: str, tau: float, sigma: float) -> float:
+    if term == "Q":
+        return sigma * tau / math.sqrt(3.0)
+    if term == "N":
+        return sigma * math.sqrt(tau / 3600.0)
+    if term == "B":
+        return sigma / BI_FACTOR
+    if term == "K":
+        return sigma * math.sqrt(3.0 * 3600.0 / tau)
+    return 3600.0 * math.sqrt(2.0) * sigma / tau
+
+
+def slope_readouts(tau, dev, dev_low=None, dev_high=None) -> dict:
+    """Readouts ``{term: TermEstimate or None}`` from an ADEV curve in deg/h (tau in s)."""
+    tau, dev = np.asarray(tau, float), np.asarray(dev, float)
+    lo = dev if dev_low is None else np.asarray(dev_low, float)
+    hi = dev if dev_high is None else np.asarray(dev_high, float)
+    slopes = local_slopes(tau, dev)
+    last = len(dev) - 1  # the longest tau: a few terms, a one-sided slope; never read there
+    j_min = int(np.argmin(dev[:last]))
+    left, right = np.arange(j_min + 1), np.arange(j_min, last)
+    out = {}
+    for term in TERMS:
+        if term == "B":
+            j = j_min
+            ok = True
+        else:
+            where = left if SLOPES[term] < 0 else right
+            if where.size == 0:
+                out[term] = None
+                continue
+            j = int(where[np.argmin(np.abs(slopes[where] - SLOPES[term]))])
+            ok = abs(slopes[j] - SLOPES[term]) <= _TOLERANCE
+        if not ok:
+            out[term] = None
+            continue
+        out[term] = TermEstimate(_coefficient(term, tau[j], dev[j]),
+                                 _coefficient(term, tau[j], lo[j]),
+                                 _coefficient(term, tau[j], hi[j]), UNITS[term])
+    return out

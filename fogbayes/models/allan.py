@@ -1,0 +1,138 @@
+r"""Allan-variance noise models as pure JAX functions of tau (paper 002, table 1; IEEE 952).
+
+Five-term model, sigma in deg/h and tau in s, parameters in canonical units::
+
+    sigma^2(tau) = 3 Q^2 / tau^2 + N_s^2 / tau + (2 ln2 / pi) B^2 + K_s^2 tau / 3 + R_s^2 tau^2 / 2
+
+    Q   arcsec       (= deg/h * s; 1 arcsec = 4.8481 urad)
+    N   deg/sqrt(h)  N_s = 60 N       deg/h * sqrt(s)
+    B   deg/h
+    K   deg/h^1.5    K_s = K / 60     deg/h / sqrt(s)
+    R   deg/h^2      R_s = R / 3600   deg/h / s
+
+Paper 002 writes the fit as sigma^2(tau) = sum_n C_n^2 tau^n (n = -2..2; its eq. 6 prints a
+sum of deviations, but its conversions are those of the variance form) and converts
+N = C_-1 / 60, B = C_0 / 0.664, K = 60 sqrt(3) C_1, R = 3600 sqrt(2) C_2, Q = C_-2 / sqrt(3);
+:func:`params_from_coefficients` and :func:`coefficients_from_params` are exactly these.
+(0.664 is the paper's rounding of sqrt(2 ln2 / pi) = 0.6643.)
+
+Extra terms of table 1: first-order Gauss-Markov noise with stationary std ``sigma`` and
+correlation time ``T_c`` (driving intensity q_c^2 = 2 sigma^2 / T_c),
+
+    sigma^2(tau) = (q_c T_c)^2 / tau * [1 - T_c / (2 tau) (3 - 4 e^{-tau/T_c} + e^{-2 tau/T_c})],
+
+and a sinusoid of amplitude Omega_0 and frequency f_0,
+sigma^2(tau) = Omega_0^2 (sin^2(pi f_0 tau) / (pi f_0 tau))^2 (the paper prints the inner ratio
+without its square; the squared form is IEEE 952's and is what a sinusoid gives).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+TERMS = ("Q", "N", "B", "K", "R")
+UNITS = {"Q": "arcsec", "N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h^1.5", "R": "deg/h^2"}
+#: log-log slope of the deviation sigma(tau) for each term
+SLOPES = {"Q": -1.0, "N": -0.5, "B": 0.0, "K": 0.5, "R": 1.0}
+#: exponent n of tau in each variance term
+POWERS = {"Q": -2, "N": -1, "B": 0, "K": 1, "R": 2}
+ARCSEC_IN_URAD = math.pi / (180.0 * 3600.0) * 1e6
+BI_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)  # 0.6643: ADEV floor = BI_FACTOR * B
+#: variance coefficient a_n (sigma^2 = sum a_n tau^n) per squared canonical parameter
+_A_PER_P2 = {"Q": 3.0, "N": 3600.0, "B": 2.0 * math.log(2.0) / math.pi,
+             "K": 1.0 / (3.0 * 3600.0), "R": 1.0 / (2.0 * 3600.0**2)}
+
+
+class AllanParams(NamedTuple):
+    """Five-term noise parameters in canonical units (see the module docstring)."""
+
+    Q: float = 0.0
+    N: float = 0.0
+    B: float = 0.0
+    K: float = 0.0
+    R: float = 0.0
+
+
+def term_avar(params, tau):
+    """Variance of each term, shape (5, len(tau)) in (deg/h)^2, in the order of TERMS."""
+    tau = jnp.asarray(tau)
+    return jnp.stack([_A_PER_P2[t] * jnp.asarray(p) ** 2 * tau ** POWERS[t]
+                      for t, p in zip(TERMS, params)])
+
+
+def avar(params, tau):
+    """Five-term Allan variance sigma^2(tau) in (deg/h)^2.
+
+    Example:
+        >>> float(avar(AllanParams(N=1.0), 3600.0))  # N deg/sqrt(h) reads at tau = 1 h
+        1.0
+    """
+    return jnp.sum(term_avar(params, tau), axis=0)
+
+
+def adev(params, tau):
+    """Five-term Allan deviation sigma(tau) in deg/h."""
+    return jnp.sqrt(avar(params, tau))
+
+
+def variance_coefficients(params) -> jnp.ndarray:
+    """a_n of sigma^2 = sum_n a_n tau^n (n = -2..2), tau in s, sigma in deg/h."""
+    return jnp.stack([_A_PER_P2[t] * jnp.asarray(p) ** 2 for t, p in zip(TERMS, params)])
+
+
+def params_from_variance_coefficients(a) -> AllanParams:
+    """Inverse of :func:`variance_coefficients` (negative a_n give 0)."""
+    return AllanParams(*[math.sqrt(max(float(x), 0.0) / _A_PER_P2[t]) for t, x in zip(TERMS, a)])
+
+
+def params_from_coefficients(C) -> AllanParams:
+    """Paper 002's conversions from its C_n (n = -2..2, sigma^2 = sum C_n^2 tau^n).
+
+    Example (the paper's reported fit):
+        >>> p = params_from_coefficients([1.1754e-5, 1.0228e-2, 3.835e-3, 1.196e-3, 1.827e-4])
+        >>> [float(f"{v:.4g}") for v in p]
+        [6.786e-06, 0.0001705, 0.005776, 0.1243, 0.9302]
+    """
+    c_q, c_n, c_b, c_k, c_r = (float(c) for c in C)
+    return AllanParams(Q=c_q / math.sqrt(3.0), N=c_n / 60.0, B=c_b / 0.664,
+                       K=60.0 * math.sqrt(3.0) * c_k, R=3600.0 * math.sqrt(2.0) * c_r)
+
+
+def coefficients_from_params(params) -> tuple[float, ...]:
+    """Paper 002's C_n from canonical parameters (inverse of :func:`params_from_coefficients`)."""
+    p = AllanParams(*params)
+    return (math.sqrt(3.0) * p.Q, 60.0 * p.N, 0.664 * p.B, p.K / (60.0 * math.sqrt(3.0)),
+            p.R / (3600.0 * math.sqrt(2.0)))
+
+
+def markov_avar(tau, *, sigma, tau_c):
+    """First-order Gauss-Markov term (paper 002 table 1), sigma deg/h, tau_c s."""
+    tau = jnp.asarray(tau)
+    x = tau / tau_c
+    qt2 = 2.0 * sigma**2 * tau_c  # (q_c T_c)^2 with q_c^2 = 2 sigma^2 / T_c
+    # 1 - (3 - 4 e^-x + e^-2x) / (2x), written with expm1 so small x does not cancel
+    inner = 1.0 - (-4.0 * jnp.expm1(-x) + jnp.expm1(-2.0 * x)) / (2.0 * x)
+    return qt2 / tau * inner
+
+
+def sinusoid_avar(tau, *, amplitude, frequency):
+    """Sinusoidal rate term Omega_0^2 (sin^2(pi f0 tau) / (pi f0 tau))^2 (IEEE 952 form)."""
+    x = jnp.pi * frequency * jnp.asarray(tau)
+    return amplitude**2 * (jnp.sin(x) ** 2 / x) ** 2
+
+
+def noise_scales(params, fs: float):
+    """Scales of the power-law noises (quantization, white, flicker, rate random walk) in the
+    sample units of :mod:`fogbayes.stats.allan_cov`, so that their expected AVARs are the
+    Q, N, B and K terms (R, a deterministic ramp, adds to the mean only)."""
+    q, n, b, k = (jnp.asarray(p) for p in tuple(params)[:4])
+    return jnp.stack([q**2 * fs**2, (60.0 * n) ** 2 * fs, b**2 / (2.0 * jnp.pi),
+                      (k / 60.0) ** 2 / fs])
+
+
+def ramp_avar(params, tau):
+    """The rate-ramp term alone (deterministic: it shifts the mean, adds no variance)."""
+    return _A_PER_P2["R"] * jnp.asarray(tuple(params)[4]) ** 2 * jnp.asarray(tau) ** 2

@@ -1,0 +1,62 @@
+"""Log-log Allan deviation figure from an ``allan`` fit document (renders only).
+
+Draws the measured ADEV with its confidence bars, the fitted total and each term's line,
+and the posterior band (and predictive band of the estimates) when the fit has them.
+Everything comes from the document of :func:`fogbayes.workflow.allan.fit_recording`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .style import COLORS, new_figure
+
+_TERM_COLORS = {"Q": "#8e44ad", "N": "#16a085", "B": "#d35400", "K": "#2980b9", "R": "#7f8c8d"}
+_TERM_NAMES = {"Q": "quantization", "N": "angle random walk", "B": "bias instability",
+               "K": "rate random walk", "R": "rate ramp"}
+
+
+def allan_figure(doc: dict, *, title: str | None = None):
+    """The figure (a matplotlib Figure) for an ``allan`` document."""
+    fig, ax = new_figure(figsize=(10.0, 4.6))
+    tau, dev = np.asarray(doc["tau"], float), np.asarray(doc["adev"], float)
+    lo, hi = np.asarray(doc["adev_low"], float), np.asarray(doc["adev_high"], float)
+    ax.errorbar(tau, dev, yerr=[dev - lo, hi - dev], fmt="o", ms=3, color=COLORS["data"],
+                ecolor=COLORS["data"], elinewidth=0.8, capsize=1.5,
+                label=f"ADEV ({doc.get('ci', 0.9):.0%} interval)")
+    fit = doc.get("fit", {})
+    rng = fit.get("range") or {}
+    if rng.get("taus_left_out"):
+        ax.axvspan(tau[0] / 1.3, np.sqrt(rng["tau_min"] * tau[rng["taus_left_out"] - 1]),
+                   color=COLORS["data"], alpha=0.1, lw=0,
+                   label=f"left out of the fit ({rng['taus_left_out']} taus)")
+    band = fit.get("band")
+    if band:
+        ax.fill_between(band["tau"], band["adev_low"], band["adev_high"], color=COLORS["band"],
+                        alpha=0.2, lw=0, label="posterior band (model)")
+    pred = fit.get("predictive")
+    if pred:
+        ax.vlines(pred["tau"], pred["adev_low"], pred["adev_high"], color=COLORS["band"],
+                  lw=3, alpha=0.25, label="posterior predictive (estimates)")
+    curves = fit.get("curves")
+    if curves:
+        ax.plot(curves["tau"], curves["total"], color=COLORS["model"],
+                label=f"fit ({fit.get('method', '')})")
+        for t, y in curves["terms"].items():
+            ax.plot(curves["tau"], y, ls="--", lw=0.9, color=_TERM_COLORS[t],
+                    label=_label(t, fit["terms"].get(t)))
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylim(0.5 * np.nanmin(lo), 2.0 * np.nanmax(hi))
+    ax.set_xlabel("averaging time tau (s)")
+    ax.set_ylabel(f"Allan deviation ({doc.get('unit', 'deg/h')})")
+    ax.set_title(title or f"Allan deviation, {doc.get('sensor_id', '')}".rstrip(", "))
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    return fig
+
+
+def _label(term: str, est: dict | None) -> str:
+    if not est:
+        return _TERM_NAMES[term]
+    return (f"{_TERM_NAMES[term]}: {term} = {est['value']:.3g} "
+            f"[{est['low']:.3g}, {est['high']:.3g}] {est['unit']}")
