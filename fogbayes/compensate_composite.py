@@ -1,0 +1,270 @@
+"""Compensation with the composite model: solve U(W) = U_measured for the input rate W.
+
+For each sample, with S_j(T) = sum_i M_ij T^i and the bias B(T, t) = U0(T) + U1(T) t,
+
+    g(W) = W * P(W) - y = 0,   P(W) = sum_j S_j(T) W^j,   y = U - B(T, t)
+
+is solved in scaled units (T', W', y' of :mod:`fogbayes.models.composite`), which keeps
+float32 usable. Methods (all start from the linear guess w0 = y / S_0(T), as the paper):
+
+* ``"halley"`` (default): w <- w - 2 g g' / (2 g'^2 - g g''), cubic convergence;
+* ``"newton"``: w <- w - g / g';
+* ``"paper"``: paper 000's fixed point w <- y / P(w), 2 iterations in the paper. It is
+  linearly convergent with rate |w P'/P| (about 0.26 at 80 deg/s), so 2 steps leave about
+  1 % at +-80 deg/s (REFERENCE.md) - kept as the paper's baseline.
+
+The iteration count is fixed and small (a static argument, unrolled so that XLA fuses the
+whole per-sample computation into one elementwise loop); :func:`choose_iterations` picks
+it once per model by running the same algorithm in NumPy over the calibrated box. Newton
+and Halley iterates are clamped into the monotone region around W = 0 (the model folds
+back beyond about +-128 deg/s for the paper's coefficients, where the inversion is
+ambiguous); a sample whose solution lies outside it ends on the clamp, or unsolved, and
+is flagged (``in_range`` False: outside the box or residual above tolerance).
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .errors import FogbayesError
+from .models.composite import FullParams, ProductParams, Scaling, _horner, product_to_full
+
+METHODS = ("halley", "newton", "paper")
+#: A sample counts as solved when |w P(w) - y| <= RESID_ABS + RESID_REL |y| (scaled
+#: units, y ~ 1 at full scale): 1e3 x above float32 rounding, far below a failed solve.
+RESID_ABS, RESID_REL = 1e-6, 1e-5
+
+
+class CompensationResult(NamedTuple):
+    """Compensated rate (deg/s) and whether the sample lies in the invertible region."""
+
+    rate: jnp.ndarray
+    in_range: jnp.ndarray
+
+
+class Compensator(NamedTuple):
+    """Everything a compiled compensator needs; call it as ``comp(U, T, t)``.
+
+    ``box`` is the monotone region in scaled rate units (lo < 0 < hi); ``iterations`` and
+    ``method`` are static (changing them compiles again, changing params does not).
+    """
+
+    params: FullParams
+    scaling: Scaling
+    box: tuple[float, float]
+    iterations: int
+    method: str
+
+    def __call__(self, U, T, t) -> CompensationResult:
+        return compensate(self.params, self.scaling, jnp.asarray(self.box), U, T, t,
+                          method=self.method, iterations=self.iterations)
+
+
+class MethodError(FogbayesError):
+    """An unknown compensation method or iteration count."""
+
+
+# ------------------------------------------------------------------------------ the kernel
+def _prepare(p: FullParams, sc: Scaling, U, T, t):
+    """Per-sample S_j(T') (list) and y' = U' - B'(T', t'), in the dtype of U."""
+    dt = jnp.result_type(U)
+    p = jax.tree_util.tree_map(lambda a: jnp.asarray(a, dt), p)
+    Tp = (T - sc.T_ref) / sc.T_scale
+    tp = t / sc.t_scale
+    y = (U - sc.U_ref) / sc.U_scale - _horner(p.c, Tp) - tp * _horner(p.d, Tp)
+    S = [_horner(p.M[:, j], Tp) for j in range(p.M.shape[1])]
+    return S, y
+
+
+def _step(method: str, S, y, w):
+    """One iteration of ``method`` for g(w) = w P(w) - y (Horner for P, P', P'')."""
+    if method == "paper":
+        return y / _poly(S, w)
+    k = len(S)
+    g = w * _poly(S, w) - y
+    g1 = _poly([(j + 1) * S[j] for j in range(k)], w)  # d/dw of sum S_j w^(j+1)
+    if method == "newton":
+        return w - g / g1
+    g2 = _poly([(j + 2) * (j + 1) * S[j + 1] for j in range(k - 1)], w) if k > 1 else 0.0 * w
+    return w - 2.0 * g * g1 / (2.0 * g1 * g1 - g * g2)
+
+
+def _poly(coefs, w):
+    out = coefs[-1] * jnp.ones_like(w)
+    for c in coefs[-2::-1]:
+        out = out * w + c
+    return out
+
+
+@partial(jax.jit, static_argnames=("method", "iterations"))
+def compensate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",
+               iterations: int = 2) -> CompensationResult:
+    """Compensated input rate W (deg/s) for outputs U at temperatures T and times t.
+
+    Args:
+        p, sc: scaled full-matrix parameters and their scaling.
+        box: (lo, hi) monotone region in scaled rate units (see :func:`monotone_box`).
+        U, T, t: arrays of one shape (any dtype; float32 stays float32).
+        method, iterations: static; see the module docstring.
+    """
+    S, y = _prepare(p, sc, U, T, t)
+    lo, hi = box[0].astype(y.dtype), box[1].astype(y.dtype)
+    w = y / S[0]
+    if method != "paper":
+        w = jnp.clip(w, lo, hi)
+    # A static, small, unrolled loop (not lax.scan): the whole chain fuses into one
+    # elementwise kernel, which is what lets compensation run at memory speed.
+    for _ in range(iterations):
+        w = _step(method, S, y, w)
+        if method != "paper":
+            w = jnp.clip(w, lo, hi)
+    if method == "paper":  # the baseline stops early by design: no convergence test
+        return CompensationResult(w * sc.W_scale, jnp.isfinite(w))
+    # invertible: inside the monotone box and actually solved (an output the model cannot
+    # produce leaves a large residual even when the iterate is inside the box)
+    resid = jnp.abs(w * _poly(S, w) - y)
+    in_range = (w > lo) & (w < hi) & (resid <= RESID_ABS + RESID_REL * jnp.abs(y))
+    return CompensationResult(w * sc.W_scale, in_range)
+
+
+def compensate_sensors(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",
+                       iterations: int = 2) -> CompensationResult:
+    """Many sensors at once: every argument has a leading sensor axis (k, ...)."""
+    f = partial(compensate, method=method, iterations=iterations)
+    return jax.jit(jax.vmap(f))(p, sc, box, U, T, t)
+
+
+def compensate_draws(p_draws: FullParams, sc: Scaling, box, U, T, t, *, key,
+                     noise_sd=None, prob: float = 0.9, method: str = "halley",
+                     iterations: int = 3):
+    """Posterior-predictive interval of the compensated rate.
+
+    For each posterior draw theta_s (leading axis of ``p_draws``) and, if ``noise_sd``
+    (scaled output units, one per draw) is given, a fresh output noise draw xi_s, the
+    rate W_s = U^-1(U - xi_s; theta_s). Returns (median, lower, upper) of W_s per sample
+    (central ``prob`` interval). Memory is draws x samples: chunk long records.
+    """
+    n_draws = p_draws.M.shape[0]
+    U = jnp.asarray(U)
+    if noise_sd is None:
+        eps = jnp.zeros((n_draws,) + U.shape, U.dtype)
+    else:
+        eps = jax.random.normal(key, (n_draws,) + U.shape, U.dtype)
+        eps = eps * (jnp.asarray(noise_sd, U.dtype) * sc.U_scale).reshape((-1,) + (1,) * U.ndim)
+    f = partial(compensate, method=method, iterations=iterations)
+    W = jax.vmap(lambda p, e: f(p, sc, box, U - e, T, t).rate)(p_draws, eps)
+    q = jnp.quantile(W, jnp.array([0.5, (1 - prob) / 2, (1 + prob) / 2]), axis=0)
+    return q[0], q[1], q[2]
+
+
+# ------------------------------------------------------------------------------ build time
+def monotone_box(p: FullParams, T_range: tuple[float, float], sc: Scaling, *,
+                 margin: float = 0.02, limit: float = 10.0, n_T: int = 41) -> tuple[float, float]:
+    """Largest (lo, hi) around 0 in scaled rate where d/dW [W P(W)] keeps its sign at all T.
+
+    The derivative sum_j (j+1) S_j(T) W^j is a polynomial in W; its real roots nearest to
+    0 on each side, over a grid of temperatures, bound the invertible region. ``margin``
+    keeps a little away from the fold; ``limit`` caps the box (in units of W_scale).
+    """
+    M = np.asarray(p.M, dtype=float)
+    Tp = (np.linspace(*T_range, n_T) - sc.T_ref) / sc.T_scale
+    lo, hi = -limit, limit
+    for x in Tp:
+        S = np.array([np.polyval(M[::-1, j], x) for j in range(M.shape[1])])
+        der = (np.arange(M.shape[1]) + 1) * S
+        roots = np.roots(der[::-1]) if M.shape[1] > 1 else np.array([])
+        real = roots[np.abs(roots.imag) < 1e-9 * np.maximum(1, np.abs(roots))].real
+        if np.any(real > 0):
+            hi = min(hi, real[real > 0].min())
+        if np.any(real < 0):
+            lo = max(lo, real[real < 0].max())
+    return float(lo * (1 - margin)), float(hi * (1 - margin))
+
+
+def compensate_numpy(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",
+                     iterations: int = 2):
+    """The same algorithm in plain NumPy (float64): reference for tests and benchmarks."""
+    M, c, d = (np.asarray(v, dtype=float) for v in p)
+    Tp = (T - sc.T_ref) / sc.T_scale
+    tp = t / sc.t_scale
+    hp = lambda k, x: np.polynomial.polynomial.polyval(x, k)  # noqa: E731
+    y = (U - sc.U_ref) / sc.U_scale - hp(c, Tp) - tp * hp(d, Tp)
+    S = [hp(M[:, j], Tp) for j in range(M.shape[1])]
+    k = len(S)
+    pv = lambda cs, w: sum(cs[j] * w ** j for j in range(len(cs)))  # noqa: E731
+    w = y / S[0]
+    clip = (lambda w: np.clip(w, box[0], box[1])) if method != "paper" else (lambda w: w)
+    w = clip(w)
+    for _ in range(iterations):
+        if method == "paper":
+            w = y / pv(S, w)
+        else:
+            g = w * pv(S, w) - y
+            g1 = pv([(j + 1) * S[j] for j in range(k)], w)
+            if method == "newton":
+                w = w - g / g1
+            else:
+                g2 = pv([(j + 2) * (j + 1) * S[j + 1] for j in range(k - 1)], w)
+                w = w - 2 * g * g1 / (2 * g1 * g1 - g * g2)
+        w = clip(w)
+    if method == "paper":
+        return w * sc.W_scale, np.isfinite(w)
+    resid = np.abs(w * pv(S, w) - y)
+    ok = (w > box[0]) & (w < box[1]) & (resid <= RESID_ABS + RESID_REL * np.abs(y))
+    return w * sc.W_scale, ok
+
+
+def choose_iterations(p: FullParams, sc: Scaling, box, T_range, W_range, *,
+                      method: str = "halley", rtol: float = 1e-9, max_iter: int = 8) -> int:
+    """Smallest fixed iteration count reaching ``rtol`` (relative) over the calibrated box.
+
+    Runs :func:`compensate_numpy` on model-consistent outputs on a grid of temperatures
+    and rates (T_range x W_range, clipped to the monotone box) and returns the first count
+    whose worst relative rate error is below ``rtol``; raises if ``max_iter`` is not enough.
+    """
+    if method not in METHODS:
+        raise MethodError(f"unknown method {method!r}", column="method",
+                          fix=f"use one of {', '.join(METHODS)}")
+    from .models.composite import predict_scaled
+    Tg = np.linspace(*T_range, 21)
+    wlo = max(W_range[0] / sc.W_scale, box[0] * 0.999)
+    whi = min(W_range[1] / sc.W_scale, box[1] * 0.999)
+    Wg = np.linspace(wlo, whi, 201)
+    Wg = Wg[np.abs(Wg) > 1e-6]
+    T, W = (a.ravel() for a in np.meshgrid(Tg, Wg * sc.W_scale))
+    Tp = (T - sc.T_ref) / sc.T_scale
+    U = sc.U_ref + sc.U_scale * np.asarray(predict_scaled(p, Tp, W / sc.W_scale, 0.0 * T))
+    for k in range(max_iter + 1):
+        w, _ = compensate_numpy(p, sc, box, U, T, 0.0 * T, method=method, iterations=k)
+        if np.max(np.abs(w - W) / np.abs(W)) < rtol:
+            return k
+    raise MethodError(f"{method} needs more than {max_iter} iterations over the calibrated range",
+                      column="iterations", fix="use method='halley' or a smaller rate range")
+
+
+def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_range,
+                      method: str = "halley", iterations: int | None = None,
+                      rtol: float = 1e-9) -> Compensator:
+    """A ready-to-call :class:`Compensator` (box and iteration count fixed here, once).
+
+    ``rtol`` = 1e-9 (1e-7 %) is far below any gyro's noise and the done-when's 1e-4 %, and
+    for paper 000's coefficients gives Halley 2 iterations, the paper's own count.
+    """
+    if isinstance(p, ProductParams):
+        p = product_to_full(p)
+    if method not in METHODS:
+        raise MethodError(f"unknown method {method!r}", column="method",
+                          fix=f"use one of {', '.join(METHODS)}")
+    box = monotone_box(p, T_range, sc)
+    if iterations is None:
+        iterations = 2 if method == "paper" else choose_iterations(
+            p, sc, box, T_range, W_range, method=method, rtol=rtol)
+    if int(iterations) != iterations or iterations < 0:
+        raise MethodError(f"iterations must be a non-negative integer, got {iterations!r}",
+                          column="iterations", fix="pass e.g. iterations=2")
+    return Compensator(p, sc, box, int(iterations), method)

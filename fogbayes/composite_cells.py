@@ -1,0 +1,172 @@
+"""Rate-table recordings as (T_i, W_j) cells for the composite model (paper 000).
+
+A rate-table run holds the gyro at temperature plateaus T_i and, at each, at input rates
+W_j. :func:`rate_data` finds the cells with :func:`fogbayes.preprocess.segment_rate_table`
+(or takes a user schedule), and returns the in-cell samples with their operating time t,
+the ``t`` of U1(T) t in eq. 8. Paper 000 fits U_ij = A_ij + B_ij t per cell (eq. 10), so t
+restarts with each cell by default; the conventions are::
+
+    "cell"         t = time - (time of the last input-rate step)      (default)
+    "temperature"  t = time - (start of the current temperature plateau)
+    "run"          t = time - time[0]
+
+A constant shift of t within every cell only moves U1(T) t into U0(T) (same orders), so
+where exactly a plateau "starts" does not matter as long as it is the same for all cells.
+
+:func:`summarise_cells` reduces each cell to its least-squares line in t
+(n, t-mean, mean, slope, Sxx, RSS), from which A_ij = mean - slope * t-mean and
+B_ij = slope (eq. 10), all vectorised with ``np.bincount``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .data.recording import Recording
+from .errors import FogbayesError, MissingColumnError, TooShortError
+
+CONVENTIONS = ("cell", "temperature", "run")
+
+
+class RateData(NamedTuple):
+    """In-cell samples of a rate-table run (m samples, K cells, n_T x n_W levels)."""
+
+    U: np.ndarray  # (m,) output, recording unit
+    T: np.ndarray  # (m,) deg C, measured
+    W: np.ndarray  # (m,) deg/s, reference input rate
+    t: np.ndarray  # (m,) s, operating time
+    cell: np.ndarray  # (m,) int, 0..K-1
+    row: np.ndarray  # (m,) int, row in the recording
+    time: np.ndarray  # (m,) s, absolute time stamps (orders the cells in time)
+    cell_i: np.ndarray  # (K,) temperature level of each cell
+    cell_j: np.ndarray  # (K,) rate level of each cell
+    temperature_levels: np.ndarray  # (n_T,) deg C
+    rate_levels: np.ndarray  # (n_W,) deg/s
+
+
+class CellSummary(NamedTuple):
+    """Per-cell least-squares line U = mean + slope (t - t_mean) (all (K,))."""
+
+    n: np.ndarray
+    t_mean: np.ndarray
+    mean: np.ndarray
+    slope: np.ndarray
+    Sxx: np.ndarray
+    rss: np.ndarray
+    T: np.ndarray  # mean temperature of the cell
+    W: np.ndarray  # mean input rate of the cell
+
+    @property
+    def intercept(self) -> np.ndarray:
+        """A_ij of eq. 10: the line at t = 0."""
+        return self.mean - self.slope * self.t_mean
+
+
+class ConventionError(FogbayesError):
+    """An unknown operating-time convention."""
+
+
+def _check_convention(convention: str) -> str:
+    if convention not in CONVENTIONS:
+        raise ConventionError(f"unknown operating-time convention {convention!r}",
+                              column="operating_time", fix=f"use one of {', '.join(CONVENTIONS)}")
+    return convention
+
+
+def operating_time(time, input_rate=None, cells=None, *, convention: str = "cell",
+                   rate_tolerance: float = 0.01) -> np.ndarray:
+    """Operating time t (s) of every sample under ``convention`` (see the module doc).
+
+    ``"cell"`` restarts at every input-rate step (|dW| > ``rate_tolerance`` between
+    samples); ``"temperature"`` at the first cell of each run of cells at one temperature
+    level (``cells`` from :func:`segment_rate_table`); both fall back to ``"run"`` when
+    their information is missing.
+    """
+    time = np.asarray(time, dtype=float)
+    _check_convention(convention)
+    origin_idx = np.zeros(time.size, int)
+    if convention == "cell" and input_rate is not None:
+        step = np.flatnonzero(np.abs(np.diff(np.asarray(input_rate, float))) > rate_tolerance) + 1
+        marks = np.zeros(time.size, int)
+        marks[step] = step
+        origin_idx = np.maximum.accumulate(marks)
+    elif convention == "temperature" and cells:
+        marks = np.zeros(time.size, int)
+        prev = None
+        for c in cells:
+            if c.i != prev:
+                marks[c.start] = c.start
+            prev = c.i
+        origin_idx = np.maximum.accumulate(marks)
+    return time - time[origin_idx]
+
+
+def rate_data(rec: Recording, *, convention: str = "cell", schedule=None, table=None,
+              **segment_options) -> tuple[RateData, object]:
+    """Split a rate-table Recording into cells; returns (RateData, the RateTable used).
+
+    Args:
+        rec: needs ``input_rate`` (deg/s) and a temperature channel (its first is used).
+        convention: operating-time convention ("cell", "temperature", "run").
+        schedule: optional [(t_start, t_stop, T, W), ...] replacing plateau detection.
+        table: a ready :class:`fogbayes.preprocess.RateTable` (skips detection).
+        **segment_options: passed to :func:`fogbayes.preprocess.segment_rate_table`.
+    """
+    from .preprocess import segment_rate_table
+
+    src = rec.meta.source
+    if rec.input_rate is None and schedule is None and table is None:
+        raise MissingColumnError("the composite model needs the reference input rate",
+                                 file=src, column="input_rate",
+                                 fix="add an 'input_rate' column (deg/s) from the rate table")
+    if not rec.has_temperature:
+        raise MissingColumnError("the composite model needs a temperature channel", file=src,
+                                 column="temperature", fix="add a 'temperature' column in deg C")
+    _check_convention(convention)
+    if table is None:
+        table = segment_rate_table(rec.time, rec.input_rate, rec.temperature,
+                                   schedule=schedule, **segment_options)
+    if len(table.cells) < 2:
+        raise TooShortError(f"found {len(table.cells)} rate-table cell(s)", file=src,
+                            column="input_rate", fix="record several rates and temperatures")
+    W_all = rec.input_rate if rec.input_rate is not None else _nominal_rate(rec.n, table)
+    tol = float(segment_options.get("rate_tolerance", 0.01))
+    t_all = operating_time(rec.time, W_all, table.cells, convention=convention, rate_tolerance=tol)
+    rows = np.concatenate([np.arange(c.start, c.stop) for c in table.cells])
+    cell = np.concatenate([np.full(c.stop - c.start, k) for k, c in enumerate(table.cells)])
+    data = RateData(U=np.asarray(rec.output[rows], float), T=np.asarray(rec.temperature[rows]),
+                    W=np.asarray(W_all[rows], float), t=t_all[rows], cell=cell, row=rows, time=np.asarray(rec.time[rows]),
+                    cell_i=np.array([c.i for c in table.cells]),
+                    cell_j=np.array([c.j for c in table.cells]),
+                    temperature_levels=np.asarray(table.temperature_levels, float),
+                    rate_levels=np.asarray(table.rate_levels, float))
+    return data, table
+
+
+def _nominal_rate(n: int, table) -> np.ndarray:
+    """Scheduled rates on the cells (used when the file has no input_rate column)."""
+    W = np.zeros(n)
+    for c in table.cells:
+        W[c.start:c.stop] = c.rate
+    return W
+
+
+def summarise_cells(data: RateData) -> CellSummary:
+    """Per-cell OLS line in t, vectorised (no Python loop over cells)."""
+    K = int(data.cell.max()) + 1
+    cnt = np.bincount(data.cell, minlength=K).astype(float)
+    if np.any(cnt < 3):
+        bad = int(np.flatnonzero(cnt < 3)[0])
+        raise TooShortError(f"cell {bad} has {int(cnt[bad])} sample(s); a line needs 3",
+                            column="input_rate", fix="hold each rate longer (or lower trim_s)")
+    mean_of = lambda x: np.bincount(data.cell, x, K) / cnt  # noqa: E731
+    tm, um = mean_of(data.t), mean_of(data.U)
+    dt, du = data.t - tm[data.cell], data.U - um[data.cell]
+    sxx = np.bincount(data.cell, dt * dt, K)
+    sxy = np.bincount(data.cell, dt * du, K)
+    # a cell whose time does not vary (one instant) gives no slope: treat it as 0
+    slope = np.where(sxx > 0, sxy / np.where(sxx > 0, sxx, 1.0), 0.0)
+    rss = np.bincount(data.cell, (du - slope[data.cell] * dt) ** 2, K)
+    return CellSummary(cnt, tm, um, slope, sxx, rss, mean_of(data.T), mean_of(data.W))

@@ -1,0 +1,146 @@
+"""Compensation with the composite model: the paper's tables, exact inversion, float32, vmap.
+
+Reference numbers: paper 000 Tables 1-2 (and REFERENCE.md's recomputation); truth is the
+rate that generated noise-free outputs from the eq. 15/16/12 coefficients.
+"""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from fogbayes.compensate_composite import (MethodError, build_compensator, compensate,
+                                           compensate_draws, compensate_numpy,
+                                           compensate_sensors, monotone_box)
+from fogbayes.composite_tables import (PAPER_TABLES, before_after, format_table, nominal_rate,
+                                       paper_comparison)
+from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
+
+TEMPS = np.array([-30, -20, -10, -5, 0, 5, 10, 20, 40, 60.0])
+RATES = np.array([-80, -40, -20, -10, -5, -2, -1, 1, 2, 5, 10, 20, 40, 80.0])
+TG, WG = (a.ravel() for a in np.meshgrid(TEMPS, RATES, indexing="ij"))
+TT = np.full(TG.shape, 30.0)  # 30 s of operating time: exercises the U1(T) t term
+U = raw_predict(PAPER_000, TG, WG, TT)
+SC = Scaling(15.0, 45.0, 80.0, 60.0, float(U.mean()), float(np.abs(U - U.mean()).max()))
+P = from_raw(PAPER_000, SC)
+
+
+def _rel_pct(w):
+    return np.abs(np.asarray(w) - WG) / np.abs(WG) * 100
+
+
+def _comp(method, **kw):
+    return build_compensator(P, SC, T_range=(-30, 60), W_range=(-80, 80), method=method, **kw)
+
+
+def _rows():
+    rates = {"before": nominal_rate(PAPER_000, U),
+             "paper": _comp("paper")(U, TG, TT).rate, "fogbayes": _comp("halley")(U, TG, TT).rate}
+    return before_after(TG, WG, np.arange(TG.size), rates)
+
+
+def test_before_matches_the_paper_tables_at_80():
+    # the paper's "before" column is measured; the model-consistent nominal-calibration
+    # reading must be within 1.5 points of it at +-80 deg/s (measured: 0.68 .. 0.98)
+    diffs = [r for r in paper_comparison(_rows(), "before") if abs(r["rate"]) == 80]
+    assert len(diffs) == 6
+    for r in diffs:
+        assert abs(r["difference"]) < 1.5, r
+    # and the paper's trend: the error grows with temperature at +-80 deg/s
+    by_T = {r["temperature"]: r["ours_pct"] for r in diffs if r["rate"] == 80}
+    assert by_T[-30] < by_T[20] < by_T[60]
+
+
+def test_paper_two_step_scheme_leaves_about_one_percent():
+    rows = _rows()
+    at80 = [r for r in paper_comparison(rows, "paper") if abs(r["rate"]) == 80]
+    for r in at80:
+        # REFERENCE.md: 0.96 .. 1.06 %; the paper's measured "after": 0.82 .. 1.07 %
+        assert 0.9 < r["ours_pct"] < 1.1 and abs(r["difference"]) < 0.25, r
+
+
+def test_fogbayes_inversion_is_exact_on_the_grid():
+    comp = _comp("halley")
+    # Halley converges cubically: 2 iterations reach 1e-9 relative over +-80 deg/s, the
+    # same count as the paper's scheme
+    assert comp.iterations == 2
+    err = _rel_pct(comp(U, TG, TT).rate)
+    assert err.max() < 1e-4  # done-when: < 1e-4 % everywhere (measured ~1e-7 %)
+    newton = _comp("newton")
+    assert _rel_pct(newton(U, TG, TT).rate).max() < 1e-4
+
+
+def test_table_text_has_the_paper_layout():
+    text = format_table(_rows(), temperatures=(20.0,), rates=(-80.0, 5.0, 10.0, 20.0, 80.0))
+    lines = text.splitlines()
+    assert len(lines) == 2 + 5 and "before error (%)" in lines[0] and "fogbayes" in lines[0]
+    assert set(PAPER_TABLES) >= {(20.0, -80.0), (60.0, 5.0)}
+
+
+def test_float32_inputs_stay_float32_and_accurate():
+    comp = _comp("halley")
+    r32 = comp(U.astype(np.float32), TG.astype(np.float32), TT.astype(np.float32))
+    assert r32.rate.dtype == jnp.float32
+    # centred inputs keep single precision usable: measured 2.4e-5 % worst case (a float32
+    # ulp is 6e-6 %, the rest is the rounding of U ~ 3000 V when forming U - U0)
+    assert _rel_pct(r32.rate).max() < 1e-3
+
+
+def test_jax_matches_plain_numpy_and_compiles_once():
+    comp = _comp("halley")
+    ref, ok = compensate_numpy(P, SC, comp.box, U, TG, TT, method="halley", iterations=2)
+    res = comp(U, TG, TT)
+    np.testing.assert_allclose(res.rate, ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(res.in_range, ok)
+    before = compensate._cache_size()
+    comp(U * 1.0001, TG, TT)  # new values, same shapes/static args: no recompilation
+    P2 = from_raw(PAPER_000._replace(c=PAPER_000.c + 0.1), SC)
+    compensate(P2, SC, jnp.asarray(comp.box), U, TG, TT, method="halley", iterations=2)
+    assert compensate._cache_size() == before
+
+
+def test_vmap_over_sensors_equals_a_loop():
+    P2 = from_raw(PAPER_000._replace(c=PAPER_000.c * 1.01), SC)
+    stack = jax.tree_util.tree_map(lambda a, b: jnp.stack([a, b]), P, P2)
+    scs = Scaling(*[jnp.array([v, v]) for v in SC])
+    box = jnp.array([monotone_box(P, (-30, 60), SC), monotone_box(P2, (-30, 60), SC)])
+    Us = jnp.stack([U, U + 1.0])
+    res = compensate_sensors(stack, scs, box, Us, jnp.stack([TG, TG]), jnp.stack([TT, TT]))
+    for k, p in enumerate((P, P2)):
+        one = compensate(p, SC, box[k], Us[k], TG, TT, method="halley", iterations=2)
+        np.testing.assert_allclose(res.rate[k], one.rate, rtol=1e-13)
+
+
+def test_outputs_beyond_the_fold_are_flagged():
+    comp = _comp("halley")
+    lo, hi = comp.box
+    assert -1.7 < lo < -1.5 and 1.5 < hi < 1.7  # the model folds near +-128 deg/s (W_scale 80)
+    T20 = np.full(3, 20.0)
+    peak = raw_predict(PAPER_000, T20[:2], np.array([hi, lo]) * 80 / 0.98, np.zeros(2))
+    # an output larger than the model can produce (beyond the fold) has no inverse: flagged
+    U_far = np.r_[raw_predict(PAPER_000, 20.0, 60.0, 0.0), peak * 1.05]
+    res = comp(U_far, T20, np.zeros(3))
+    assert res.in_range.tolist() == [True, False, False]
+    np.testing.assert_allclose(res.rate[0], 60.0, rtol=1e-9)
+
+
+def test_posterior_interval_covers_the_truth():
+    # draws scattered around the truth: the interval must bracket the true rate, and
+    # collapse onto it when every draw is the truth and there is no noise
+    key = jax.random.PRNGKey(0)
+    th = jnp.stack([jnp.concatenate([P.M.ravel(), P.c, P.d])] * 50)
+    th = th * (1 + 1e-4 * jax.random.normal(key, th.shape))
+    from fogbayes.models.composite import PAPER_ORDERS, unpack
+    draws = unpack(th, PAPER_ORDERS)
+    box = jnp.asarray(monotone_box(P, (-30, 60), SC))
+    med, lo, hi = compensate_draws(draws, SC, box, U, TG, TT, key=key, noise_sd=np.full(50, 1e-5))
+    assert np.all(np.asarray(lo) <= WG) and np.all(WG <= np.asarray(hi))
+    same = unpack(jnp.stack([th[0] * 0 + jnp.concatenate([P.M.ravel(), P.c, P.d])] * 4),
+                  PAPER_ORDERS)
+    med, lo, hi = compensate_draws(same, SC, box, U, TG, TT, key=key)
+    np.testing.assert_allclose(np.asarray(hi) - np.asarray(lo), 0.0, atol=1e-9)
+
+
+def test_bad_method_raises():
+    with pytest.raises(MethodError, match="method"):
+        _comp("secant")
