@@ -23,7 +23,7 @@ def _root(quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing
 
 
 # Subcommands register themselves on import (order = order in --help).
-from . import allan, arma, compensate, demo, fit, info, report, simulate  # noqa: E402,F401
+from . import allan, arma, compensate, demo, fit, info, loop, report, simulate  # noqa: E402,F401
 from . import stubs  # noqa: E402,F401  (commands not built yet say so and exit 1)
 
 

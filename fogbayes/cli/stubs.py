@@ -7,7 +7,6 @@ import typer
 from ._app import app
 
 _NOT_BUILT = {
-    "loop": "the closed loop (fit -> diagnose -> add effect -> refit)",
     "batch": "fleet processing of many recordings",
 }
 

@@ -1,0 +1,16 @@
+"""Residuals -> findings: candidate effects, evidence under coloured noise, model-free scans.
+
+* :mod:`.candidates` -- every DESIGN.md effect name as a family of model terms;
+* :mod:`.evidence` -- bootstrap-calibrated screening under the state-space noise model;
+* :mod:`.markov` -- the ``markov_noise`` noise-model candidate;
+* :mod:`.elpd` -- PSIS-LOO / WAIC through ArviZ;
+* :mod:`.scans` -- structure no candidate names (``unexplained``).
+"""
+
+from .candidates import EFFECTS, Candidate, candidates_for
+from .context import Context, make_context
+from .fitting import ModelFit, fit_terms
+from .terms import Term
+
+__all__ = ["EFFECTS", "Candidate", "Context", "ModelFit", "Term", "candidates_for",
+           "fit_terms", "make_context"]

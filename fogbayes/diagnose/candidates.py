@@ -1,0 +1,194 @@
+"""The library of candidate effects: every DESIGN.md effect name as a model term.
+
+Each candidate is a small family of :class:`~fogbayes.diagnose.terms.Term` s -- one per
+value of its searched parameter -- that would be *added* to the current model (nested
+alternatives, so a likelihood ratio compares them)::
+
+    temperature_order          next power of T'                    (no search)
+    temperature_rate           dT/dt                                (no search)
+    temperature_gradient       T_j - T_0 for each other channel j   (channel searched)
+    thermal_hysteresis         tanh(dT/dt / r0)                     (r0 searched, deg C/min)
+    thermal_lag                L_tau[T_0]                           (tau searched, s)
+    time_drift                 t, or exp(-t / tau)                  (form and tau searched)
+    step                       1[t >= time]                         (time searched)
+    periodic                   sin, cos (2 pi f t)                  (f searched: spectral scan)
+    scale_factor_nonlinearity  next power(s) of W                   (rate table)
+    scale_factor_asymmetry     |W|
+    scale_factor_temperature   W T'^(k+1)
+    markov_noise               a free Gauss-Markov noise component  (noise model; tau searched)
+
+Grids are coarse (the screening max over a grid is calibrated by simulation); the chosen
+value is refined afterwards (:mod:`fogbayes.diagnose.refine`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .context import Context
+from .terms import Term
+
+EFFECTS = ("temperature_order", "temperature_rate", "temperature_gradient", "thermal_hysteresis",
+           "thermal_lag", "time_drift", "periodic", "step", "scale_factor_nonlinearity",
+           "scale_factor_asymmetry", "scale_factor_temperature", "markov_noise")
+
+#: How many times the loop may add an effect of each name.
+MAX_TIMES = {"temperature_order": 3, "time_drift": 2, "step": 3, "periodic": 3,
+             "scale_factor_nonlinearity": 2, "markov_noise": 1}
+
+
+class Candidate(NamedTuple):
+    """One effect the model lacks.
+
+    effect: DESIGN.md name; kind: "linear" (grid of nested terms), "spectral" (periodic,
+    scanned by FFT) or "noise" (a noise-model component); grid: one Term per searched
+    value; covariates: the drivers it uses; searched: the searched parameter or None.
+    """
+
+    effect: str
+    kind: str
+    grid: tuple[Term, ...]
+    covariates: tuple[str, ...]
+    searched: str | None
+
+
+def _count(terms, effect: str) -> int:
+    return sum(1 for tm in terms if tm.params.get("effect") == effect)
+
+
+def _tpoly(terms) -> Term | None:
+    for tm in terms:
+        if tm.kind == "tpoly" and tm.params["channel"] == 0:
+            return tm
+    return None
+
+
+def _tscale(ctx: Context) -> tuple[float, float]:
+    T = ctx.cov.T[:, 0]
+    lo, hi = float(np.min(T)), float(np.max(T))
+    return 0.5 * (lo + hi), max(0.5 * (hi - lo), 1e-3)
+
+
+def _e(effect: str, **params) -> dict:
+    return {"effect": effect, **params}
+
+
+def thermal_candidates(ctx: Context, terms) -> list[Candidate]:
+    """Candidates driven by temperature (need a channel that actually varies)."""
+    cov, out = ctx.cov, []
+    if cov.n_temps == 0 or np.ptp(cov.T[:, 0]) < 0.5:
+        return out
+    centre, scale = _tscale(ctx)
+    kinds = {tm.kind for tm in terms}
+    tp = _tpoly(terms)
+    order = max(tp.params["powers"]) if tp is not None else 0
+    if _count(terms, "temperature_order") < MAX_TIMES["temperature_order"] and order < 6:
+        out.append(Candidate("temperature_order", "linear", (Term("tpoly", _e(
+            "temperature_order", channel=0, powers=[order + 1], centre=centre, scale=scale)),),
+            ("temperature",), None))
+    rate_scale = max(float(np.max(np.abs(cov.Tdot))), 1e-3)
+    moving = rate_scale > 0.02  # deg C/min: below this the record is effectively soaked
+    if moving and not kinds & {"rate", "rate_poly"}:
+        out.append(Candidate("temperature_rate", "linear", (Term("rate", _e(
+            "temperature_rate", scale=rate_scale)),), ("dT/dt",), None))
+    if cov.n_temps >= 2 and "gradient" not in kinds:
+        grid = []
+        for j in range(1, cov.n_temps):
+            d = cov.T[:, j] - cov.T[:, 0]
+            if np.ptp(d) > 0.05:
+                grid.append(Term("gradient", _e("temperature_gradient", a=0, b=j,
+                                                scale=max(float(np.max(np.abs(d))), 1e-3))))
+        if grid:
+            out.append(Candidate("temperature_gradient", "linear", tuple(grid),
+                                 tuple(["temperature"] + [cov.names[t.params["b"]] for t in grid]),
+                                 "channel" if len(grid) > 1 else None))
+    if moving and "hysteresis" not in kinds:
+        r0s = [r for r in (0.01, 0.02, 0.05, 0.1, 0.2, 0.5) if r < 0.5 * rate_scale]
+        if r0s:
+            out.append(Candidate("thermal_hysteresis", "linear", tuple(
+                Term("hysteresis", _e("thermal_hysteresis", r0=r)) for r in r0s),
+                ("dT/dt",), "r0"))
+    if moving and "lag" not in kinds:
+        lo, hi = max(60.0, 3 * ctx.grid.dt), 0.5 * cov.duration
+        if hi > 2 * lo:
+            taus = np.geomspace(lo, hi, 12)
+            out.append(Candidate("thermal_lag", "linear", tuple(
+                Term("lag", _e("thermal_lag", channel=0, tau=float(tau), centre=centre,
+                               scale=scale)) for tau in taus), ("temperature",), "tau"))
+    return out
+
+
+def time_candidates(ctx: Context, terms) -> list[Candidate]:
+    """time_drift and step (any recording)."""
+    out, dur = [], ctx.cov.duration
+    have = {tm.kind for tm in terms if tm.params.get("effect") == "time_drift"}
+    if _count(terms, "time_drift") < MAX_TIMES["time_drift"]:
+        grid = [] if "drift_lin" in have else [Term("drift_lin", _e("time_drift", duration=dur))]
+        if "drift_exp" not in have:
+            grid += [Term("drift_exp", _e("time_drift", tau=float(tau)))
+                     for tau in np.geomspace(dur / 100.0, dur, 10)]
+        if grid:
+            out.append(Candidate("time_drift", "linear", tuple(grid), ("time",), "tau"))
+    if _count(terms, "step") < MAX_TIMES["step"]:
+        obs = np.flatnonzero(ctx.grid.mask > 0)
+        lo, hi = obs[max(1, int(0.02 * obs.size))], obs[min(obs.size - 2, int(0.98 * obs.size))]
+        pos = np.unique(np.linspace(lo, hi, min(300, hi - lo + 1)).round().astype(int))
+        times = ctx.grid.t[pos] - 0.5 * ctx.grid.dt  # block boundaries
+        out.append(Candidate("step", "linear", tuple(
+            Term("step", _e("step", time=float(tm))) for tm in times), ("time",), "time"))
+    return out
+
+
+def rate_table_candidates(ctx: Context, terms) -> list[Candidate]:
+    """Scale-factor candidates (need an input rate that varies)."""
+    cov, out = ctx.cov, []
+    if cov.omega is None or np.ptp(cov.omega) <= 0:
+        return out
+    kinds = {tm.kind for tm in terms}
+    wpow = [e for tm in terms if tm.kind == "omega_poly" for e in tm.params["powers"]]
+    wscale = max(float(np.max(np.abs(cov.omega))), 1e-9)
+    top = max(wpow) if wpow else 1
+    if _count(terms, "scale_factor_nonlinearity") < MAX_TIMES["scale_factor_nonlinearity"] \
+            and top < 6:
+        out.append(Candidate("scale_factor_nonlinearity", "linear", (
+            Term("omega_poly", _e("scale_factor_nonlinearity", powers=[top + 1], scale=wscale)),
+            Term("omega_poly", _e("scale_factor_nonlinearity", powers=[top + 1, top + 2],
+                                  scale=wscale))), ("input_rate",), "order"))
+    if "omega_abs" not in kinds:
+        out.append(Candidate("scale_factor_asymmetry", "linear", (Term("omega_abs", _e(
+            "scale_factor_asymmetry", scale=wscale)),), ("input_rate",), None))
+    if cov.n_temps and np.ptp(cov.T[:, 0]) >= 0.5:
+        centre, scale = _tscale(ctx)
+        tpow = [e for tm in terms if tm.kind == "omega_tpoly" and tm.params.get("wpower", 1) == 1
+                for e in tm.params["powers"]]
+        k = (max(tpow) if tpow else 0) + 1
+        if k <= 4:
+            out.append(Candidate("scale_factor_temperature", "linear", (Term("omega_tpoly", _e(
+                "scale_factor_temperature", channel=0, powers=[k], centre=centre,
+                t_scale=scale, scale=wscale)),), ("input_rate", "temperature"), None))
+    return out
+
+
+def periodic_candidate(ctx: Context, terms) -> list[Candidate]:
+    if _count(terms, "periodic") >= MAX_TIMES["periodic"]:
+        return []
+    return [Candidate("periodic", "spectral", (), ("time",), "frequency")]
+
+
+def markov_candidate(ctx: Context, n_markov: int) -> list[Candidate]:
+    if n_markov >= MAX_TIMES["markov_noise"]:
+        return []
+    return [Candidate("markov_noise", "noise", (), ("noise",), "tau_c")]
+
+
+def candidates_for(ctx: Context, terms, *, n_markov: int = 0,
+                   effects: tuple[str, ...] | None = None) -> list[Candidate]:
+    """Every candidate the current model (``terms``, ``n_markov`` noise components) lacks."""
+    out = (thermal_candidates(ctx, terms) + time_candidates(ctx, terms)
+           + rate_table_candidates(ctx, terms) + periodic_candidate(ctx, terms)
+           + markov_candidate(ctx, n_markov))
+    if effects is not None:
+        out = [c for c in out if c.effect in effects]
+    return out

@@ -1,0 +1,73 @@
+"""Everything the diagnosis needs about one recording, computed once.
+
+``Context`` holds the rate in deg/h per sample, the outlier flags, per-sample covariates,
+the uniform block grid, block means of the rate and covariates, and the noise-model
+structure. ``block_design(terms)`` gives block means of each term's per-sample columns
+(exact for linear models, cached: the loop refits the same terms many times).
+
+Outliers: robust spikes in the first difference of the rate, |d_i - median| > 6 sigma_MAD,
+with the sample at the larger excursion flagged. They are left out of block means and
+reported in the compensated output (never removed from it). A difference rule is blind to
+slow effects (thermal bias, drifts), which must not be flagged as outliers.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..inference.noise_ssm import NoiseSpec, make_spec
+from .covariates import BlockGrid, Covariates, block_covariates, block_grid, covariates_of
+from .terms import Term, columns
+
+MAD_TO_SIGMA = 1.4826
+
+
+def spike_flags(x: np.ndarray, n_sigma: float = 6.0) -> np.ndarray:
+    """Flag isolated spikes: both differences around sample i exceed n_sigma robust sigmas."""
+    x = np.asarray(x, float)
+    if x.size < 5:
+        return np.zeros(x.size, bool)
+    d = np.diff(x)
+    s = MAD_TO_SIGMA * np.median(np.abs(d - np.median(d)))
+    if s <= 0:
+        return np.zeros(x.size, bool)
+    big = np.abs(d - np.median(d)) > n_sigma * s
+    flag = np.zeros(x.size, bool)
+    flag[1:-1] = big[:-1] & big[1:] & (np.sign(d[:-1]) != np.sign(d[1:]))
+    return flag
+
+
+class Context(NamedTuple):
+    """One recording prepared for the loop (see module doc)."""
+
+    rate: np.ndarray          # (n,) deg/h
+    outlier: np.ndarray       # (n,) bool
+    cov: Covariates           # per sample
+    grid: BlockGrid
+    y: np.ndarray             # (nb,) block means of the rate (0 where missing)
+    bcov: Covariates          # block means of the covariates
+    spec: NoiseSpec           # base noise structure (flicker bank + random walk)
+    cache: dict               # term repr -> block-mean columns
+
+    def block_columns(self, term: Term) -> np.ndarray:
+        key = repr(term)
+        if key not in self.cache:
+            self.cache[key] = self.grid.mean(columns(term, self.cov))
+        return self.cache[key]
+
+    def block_design(self, terms: list[Term]) -> np.ndarray:
+        return np.column_stack([self.block_columns(tm) for tm in terms])
+
+
+def make_context(rec, *, target_blocks: int = 2500, flag_outliers: bool = True,
+                 random_walk: bool = True, flicker: bool = True) -> Context:
+    """Prepare ``rec`` (a :class:`~fogbayes.data.Recording`) for the loop."""
+    rate = rec.rate("deg/h")
+    outlier = spike_flags(rate) if flag_outliers else np.zeros(rec.n, bool)
+    grid = block_grid(rec.time, rec.sample_rate, use=~outlier, target_blocks=target_blocks)
+    cov = covariates_of(rec, grid)
+    y = grid.mean(rate)
+    spec = make_spec(grid.dt, cov.duration, random_walk=random_walk, flicker=flicker)
+    return Context(rate, outlier, cov, grid, y, block_covariates(cov, grid), spec, {})

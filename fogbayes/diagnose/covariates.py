@@ -1,0 +1,165 @@
+"""Covariates of a recording and the uniform block grid the evidence works on.
+
+Block grid: a uniform grid of ``dt`` seconds from the first sample (``dt`` a whole number of
+sample intervals), so the noise model's time step is constant; blocks without samples
+(gaps, bursts) are *missing*, never filled. Block b holds samples with
+floor((t_i - t_0) / dt) = b; its value is the mean of its unflagged samples and its white
+noise variance scales as 1 / count (weight w_b = m_ref / count_b)::
+
+    ybar_b = (1 / m_b) sum_{i in b} y_i,    Var_white(ybar_b) = s2 m_ref / m_b
+
+Block means of a design column are exact for linear models: the block-mean model of
+y = X beta + noise is ybar = Xbar beta + noise-bar.
+
+Temperature rate dT/dt (deg C/min, first channel): Savitzky-Golay (order 2) derivative of
+the block-mean temperature over ``rate_window_s`` (60 s by default: long enough that
+sensor noise and 0.01 deg C quantization stay below ~0.005 deg C/min, short against the
+~300 s sensor lags of chamber tests), interpolated back to every sample by a cubic spline.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.signal import savgol_filter
+
+from ..errors import TooShortError
+
+
+class Covariates(NamedTuple):
+    """Drivers of the candidate effects, one row per sample (or per block).
+
+    t: s from the first sample; T: (n, k) deg C; names: channel names; Tdot: (n,) deg C/min
+    of the first channel (None without temperature); omega: (n,) deg/s or None;
+    duration: record span (s); op_time: operating time of a rate-table run (s since the
+    last input-rate step, :func:`fogbayes.composite_cells.operating_time`) or None.
+    """
+
+    t: np.ndarray
+    T: np.ndarray
+    names: tuple[str, ...]
+    Tdot: np.ndarray | None
+    omega: np.ndarray | None
+    duration: float
+    op_time: np.ndarray | None = None  # s since the last input-rate step (paper 000's t)
+
+    @property
+    def n_temps(self) -> int:
+        return int(self.T.shape[1])
+
+
+class BlockGrid(NamedTuple):
+    """Uniform block grid: ``index`` (n,) block of each sample, ``use`` (n,) sample used.
+
+    count (nb,) used samples per block; mask (nb,) 1.0 observed / 0.0 missing;
+    w (nb,) white-variance weight m_ref / count (1 where missing); t (nb,) block centre (s).
+    """
+
+    dt: float
+    index: np.ndarray
+    use: np.ndarray
+    count: np.ndarray
+    mask: np.ndarray
+    w: np.ndarray
+    t: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.count.size)
+
+    def mean(self, x: np.ndarray) -> np.ndarray:
+        """Block means of (n,) or (n, k) values over used samples; 0 in missing blocks."""
+        x = np.asarray(x, dtype=float)
+        flat = x.ndim == 1
+        x2 = x[:, None] if flat else x
+        idx, use = self.index[self.use], self.use
+        out = np.zeros((self.n, x2.shape[1]))
+        cnt = np.maximum(self.count, 1)
+        for j in range(x2.shape[1]):
+            out[:, j] = np.bincount(idx, weights=x2[use, j], minlength=self.n) / cnt
+        return out[:, 0] if flat else out
+
+
+def block_grid(t: np.ndarray, fs: float, *, use: np.ndarray | None = None,
+               target_blocks: int = 2500, max_dt: float = 10.0,
+               min_dt: float | None = None) -> BlockGrid:
+    """Choose ``dt`` (a multiple of 1/fs, <= ``max_dt`` when possible) and bin the samples.
+
+    ``dt = m / fs`` with m the smallest integer giving at most ``target_blocks`` blocks,
+    but never more than ``max_dt`` unless the record would then exceed 3 x target blocks.
+    """
+    t = np.asarray(t, dtype=float)
+    span = float(t[-1] - t[0])
+    step = 1.0 / float(fs)
+    m = max(1, int(math.ceil(span / step / target_blocks)))
+    if min_dt is not None:
+        m = max(m, int(math.ceil(min_dt / step - 1e-9)))
+    if m * step > max_dt and span / max_dt <= 3 * target_blocks:
+        m = max(1, int(math.floor(max_dt / step + 1e-9)))
+    dt = m * step
+    rel = t - t[0]
+    index = np.floor(rel / dt + 1e-6 * step / dt).astype(np.int64)
+    nb = int(index[-1]) + 1
+    use = np.ones(t.size, bool) if use is None else np.asarray(use, bool)
+    count = np.bincount(index[use], minlength=nb).astype(float)
+    mask = (count > 0).astype(float)
+    m_ref = float(np.median(count[count > 0])) if np.any(count > 0) else 1.0
+    w = np.where(count > 0, m_ref / np.maximum(count, 1), 1.0)
+    centre = (np.arange(nb) + 0.5) * dt
+    if int(mask.sum()) < 20:
+        raise TooShortError(f"only {int(mask.sum())} blocks of {dt:g} s hold data",
+                            column="time", fix="give a longer record (the loop needs >= 20 blocks)")
+    return BlockGrid(dt, index, use, count, mask, w, centre)
+
+
+def _fill(x: np.ndarray, mask: np.ndarray, tb: np.ndarray) -> np.ndarray:
+    ok = mask > 0
+    return np.interp(tb, tb[ok], x[ok])
+
+
+def temperature_rate(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
+                     window_s: float = 60.0) -> np.ndarray:
+    """dT/dt (deg C/min) per sample: Savitzky-Golay slope of block means, interpolated."""
+    Tb = _fill(grid.mean(T0), grid.mask, grid.t)
+    wl = int(round(window_s / grid.dt))
+    wl = max(5, wl + 1 - wl % 2)
+    if wl > Tb.size:
+        wl = Tb.size - 1 + Tb.size % 2 if Tb.size >= 5 else 0
+    if wl < 5:
+        slope = np.gradient(Tb, grid.dt)
+    else:
+        slope = savgol_filter(Tb, wl, 2, deriv=1, delta=grid.dt, mode="interp")
+    # A cubic spline, not linear interpolation: kinks every block would put a comb of
+    # lines at k / dt into every model that uses dT/dt.
+    return 60.0 * CubicSpline(grid.t, slope)(np.clip(t_rel, grid.t[0], grid.t[-1]))
+
+
+def covariates_of(rec, grid: BlockGrid, *, rate_window_s: float = 60.0) -> Covariates:
+    """Per-sample covariates of a :class:`~fogbayes.data.Recording`."""
+    t = np.asarray(rec.time, float) - float(rec.time[0])
+    T = np.asarray(rec.temperatures, float)
+    Tdot = temperature_rate(grid, T[:, 0], t, rate_window_s) if T.shape[1] else None
+    omega = None if rec.input_rate is None else np.asarray(rec.input_rate, float)
+    op = None
+    if omega is not None:
+        from ..composite_cells import operating_time
+
+        op = operating_time(t, omega, convention="cell")
+    return Covariates(t, T, tuple(rec.temperature_names), Tdot, omega, float(t[-1]), op)
+
+
+def block_covariates(cov: Covariates, grid: BlockGrid) -> Covariates:
+    """Block means of every covariate (missing blocks interpolated, so filters can run)."""
+    def m(x):
+        if x is None:
+            return None
+        b = grid.mean(x)
+        if b.ndim == 1:
+            return _fill(b, grid.mask, grid.t)
+        return np.column_stack([_fill(b[:, j], grid.mask, grid.t) for j in range(b.shape[1])]) \
+            if b.shape[1] else b
+    return Covariates(grid.t.copy(), m(cov.T), cov.names, m(cov.Tdot), m(cov.omega),
+                      cov.duration, m(cov.op_time))

@@ -1,0 +1,395 @@
+"""O(n) Gaussian likelihood of a regression under white + flicker + Markov + random-walk noise.
+
+Model for block means y_t (t = 0..n-1, step ``dt`` seconds; missing blocks allowed)::
+
+    y_t = x_t' beta + 1' s_t + e_t,              e_t ~ N(0, s2 w_t)        (white, w_t = m_ref/m_t)
+    s_{t+1,j} = phi_j s_{t,j} + u_{t,j},         u_{t,j} ~ N(0, s2 q_j)
+
+with a diagonal state of three kinds of component, all variances relative to ``s2``:
+
+* a *flicker bank*: J first-order Gauss-Markov components with fixed time constants
+  tau_j spaced by sqrt(10) and one shared stationary variance ``v_f`` (phi_j = exp(-dt/tau_j),
+  q_j = v_f (1 - phi_j^2)). Equal variance per log-spaced Lorentzian sums to a 1/f
+  spectrum over [1/tau_J, 1/tau_1], so one parameter stands for bias instability;
+* M free Gauss-Markov components (variance v_m, time constant tau_m) -- ``markov_noise``;
+* a random walk (phi = 1, q = v_rw) that starts at 0: its initial level is the intercept.
+
+The Kalman filter's covariance recursion does not depend on the data, so one pass filters
+every column of ``[y, X]`` with the same gains: the innovations of X are the columns of
+L^-1 X for the Cholesky factor L of the noise covariance. Hence the GLS normal equations
+and the exact profile likelihood (beta and s2 maximised) cost O(n d^2 + n d C)::
+
+    S = sum_t m_t v_t v_t' / F_t,  v_t = innovations of [y, X],   beta = S_XX^-1 S_Xy
+    RSS = S_yy - S_yX beta,  s2 = RSS / n_obs
+    log L = -1/2 [ n_obs log(2 pi s2) + sum_t m_t log F_t + n_obs ]
+
+Noise hyperparameters (log relative variances, log time constants) are fitted by maximum
+likelihood with L-BFGS-B on the jitted gradient. The whitened columns v_t / sqrt(F_t)
+(iid N(0, s2) under the model) are what the evidence code works with.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+from scipy import optimize
+
+Array = jax.Array
+
+BANK_PER_DECADE = 2.0
+BANK_SPAN = (0.5, 2.0)  # (x dt, x duration): the simulator's flicker reaches 1/T
+UNROLL = 1  # compile time matters more than the last 25 % of scan speed
+_LOG_BOUNDS = {"flicker": (-25.0, 12.0), "rw": (-30.0, 8.0), "mvar": (-18.0, 12.0)}
+
+
+class NoiseSpec(NamedTuple):
+    """Static structure of the noise model (hashable: a jit static argument).
+
+    dt: block step (s); bank_taus: flicker-bank time constants (s), () = no flicker;
+    n_markov: number of free Gauss-Markov components; random_walk: include a random walk;
+    tau_max: upper bound of a free Markov time constant (s).
+    """
+
+    dt: float
+    bank_taus: tuple[float, ...] = ()
+    n_markov: int = 0
+    random_walk: bool = True
+    tau_max: float = 1e5
+
+    @property
+    def n_state(self) -> int:
+        return len(self.bank_taus) + self.n_markov + int(self.random_walk)
+
+    @property
+    def n_theta(self) -> int:
+        return int(bool(self.bank_taus)) + int(self.random_walk) + 2 * self.n_markov
+
+
+def make_spec(dt: float, duration: float, *, n_markov: int = 0, random_walk: bool = True,
+              flicker: bool = True, per_decade: float = BANK_PER_DECADE,
+              span: tuple[float, float] = BANK_SPAN) -> NoiseSpec:
+    """Flicker bank from span[0] dt to span[1] duration, ``per_decade`` components a decade."""
+    taus: tuple[float, ...] = ()
+    if flicker:
+        lo, hi = span[0] * dt, max(span[1] * duration, 4.0 * span[0] * dt)
+        k = int(math.floor(math.log10(hi / lo) * per_decade + 1e-9)) + 1
+        taus = tuple(float(lo * 10 ** (j / per_decade)) for j in range(max(k, 1)))
+    return NoiseSpec(float(dt), taus, int(n_markov), bool(random_walk), float(10 * duration))
+
+
+class NoiseParams(NamedTuple):
+    """Hyperparameters, variances relative to the white variance s2 (log scale)."""
+
+    log_flicker: Array
+    log_rw: Array
+    markov_logvar: Array  # (M,)
+    markov_logtau: Array  # (M,) log seconds
+
+
+def unpack(spec: NoiseSpec, theta) -> NoiseParams:
+    """Unconstrained vector -> :class:`NoiseParams` (absent parts get -inf-like values)."""
+    theta = jnp.asarray(theta, dtype=float)
+    i = 0
+    lf = jnp.asarray(-60.0)
+    if spec.bank_taus:
+        lf, i = theta[i], i + 1
+    lrw = jnp.asarray(-60.0)
+    if spec.random_walk:
+        lrw, i = theta[i], i + 1
+    m = spec.n_markov
+    return NoiseParams(lf, lrw, theta[i:i + m], theta[i + m:i + 2 * m])
+
+
+def pack(spec: NoiseSpec, p: NoiseParams) -> np.ndarray:
+    parts = []
+    if spec.bank_taus:
+        parts.append([float(p.log_flicker)])
+    if spec.random_walk:
+        parts.append([float(p.log_rw)])
+    parts += [np.asarray(p.markov_logvar, float), np.asarray(p.markov_logtau, float)]
+    return np.concatenate([np.ravel(a) for a in parts]) if parts else np.zeros(0)
+
+
+def bounds(spec: NoiseSpec) -> list[tuple[float, float]]:
+    b = []
+    if spec.bank_taus:
+        b.append(_LOG_BOUNDS["flicker"])
+    if spec.random_walk:
+        b.append(_LOG_BOUNDS["rw"])
+    b += [_LOG_BOUNDS["mvar"]] * spec.n_markov
+    b += [(math.log(spec.dt / 2.0), math.log(spec.tau_max))] * spec.n_markov
+    return b
+
+
+def system(spec: NoiseSpec, p: NoiseParams) -> tuple[Array, Array, Array]:
+    """Diagonal transition phi (d,), process variance q (d,), initial variance p0 (d,)."""
+    phis, qs, p0s = [], [], []
+    if spec.bank_taus:
+        tb = jnp.asarray(spec.bank_taus)
+        ph = jnp.exp(-spec.dt / tb)
+        v = jnp.exp(p.log_flicker)
+        phis.append(ph)
+        qs.append(v * -jnp.expm1(-2.0 * spec.dt / tb))
+        p0s.append(v * jnp.ones_like(tb))
+    if spec.n_markov:
+        ph = jnp.exp(-spec.dt / jnp.exp(p.markov_logtau))
+        v = jnp.exp(p.markov_logvar)
+        phis.append(ph)
+        qs.append(v * -jnp.expm1(-2.0 * spec.dt / jnp.exp(p.markov_logtau)))
+        p0s.append(v)
+    if spec.random_walk:
+        phis.append(jnp.ones(1))
+        qs.append(jnp.exp(p.log_rw)[None])
+        p0s.append(jnp.zeros(1))  # the walk's starting level is the intercept
+    return jnp.concatenate(phis), jnp.concatenate(qs), jnp.concatenate(p0s)
+
+
+def _filter(phi, q, p0, Y, mask, w):
+    """Kalman filter of every column of Y (n, C) with shared gains -> innovations V, F."""
+    d, C = phi.shape[0], Y.shape[1]
+
+    def step(carry, inp):
+        A, P = carry
+        y, m, wt = inp
+        Pz = P.sum(axis=1)
+        F = Pz.sum() + wt
+        v = y - A.sum(axis=0)
+        k = Pz / F
+        Af = A + m * jnp.outer(k, v)
+        Pf = P - m * jnp.outer(k, Pz)
+        Pn = phi[:, None] * Pf * phi[None, :] + jnp.diag(q)
+        return (phi[:, None] * Af, 0.5 * (Pn + Pn.T)), (v, F)
+
+    init = (jnp.zeros((d, C)), jnp.diag(p0))
+    _, (V, F) = lax.scan(step, init, (Y, mask, w), unroll=UNROLL)
+    return V, F
+
+
+class GLSResult(NamedTuple):
+    """Profile-likelihood GLS fit at fixed noise hyperparameters.
+
+    loglik: maximised over beta and s2; beta (p,), cov_beta (p, p) = s2 S_XX^-1;
+    sigma2: s2; innov (n, 1+p) innovations of [y, X]; F (n,) their relative variances.
+    """
+
+    loglik: Array
+    beta: Array
+    cov_beta: Array
+    sigma2: Array
+    innov: Array
+    F: Array
+
+
+def _profile(V, F, mask, pad):
+    """GLS normal equations and profile log-likelihood from innovations of [y, X]."""
+    wv = V * (mask / F)[:, None]
+    S = wv.T @ V
+    Sxx = S[1:, 1:] + jnp.diag(pad)
+    Sxy = S[1:, 0]
+    L = jnp.linalg.cholesky(Sxx)
+    beta = jax.scipy.linalg.cho_solve((L, True), Sxy)
+    rss = S[0, 0] - Sxy @ beta
+    nobs = mask.sum()
+    s2 = rss / nobs
+    ll = -0.5 * (nobs * jnp.log(2 * jnp.pi * s2) + jnp.sum(mask * jnp.log(F)) + nobs)
+    cov = s2 * jax.scipy.linalg.cho_solve((L, True), jnp.eye(Sxx.shape[0]))
+    return ll, beta, cov, s2
+
+
+def gls(spec: NoiseSpec, theta, y, X, mask, w) -> GLSResult:
+    """GLS fit of y (n,) on X (n, p) under the noise model ``theta`` (see module doc).
+
+    ``mask`` (n,) 1 for observed blocks, 0 for missing ones; ``w`` (n,) white-variance
+    weights. One filter pass over [y, X] (shared compiled shape, see :func:`filter_padded`).
+    """
+    mask = np.asarray(mask, float)
+    Y = np.column_stack([np.where(mask > 0, y, 0.0), X])
+    V, F = filter_padded(spec, theta, Y, mask, w)
+    ll, beta, cov, s2 = profile_np(V, F, mask)
+    return GLSResult(ll, beta, cov, s2, V, F)
+
+
+def profile_np(V: np.ndarray, F: np.ndarray, mask: np.ndarray):
+    """(loglik, beta, cov_beta, s2) from innovations V of [y, X] (NumPy, float64)."""
+    g = mask / F
+    S = (V * g[:, None]).T @ V
+    Sxx, Sxy = S[1:, 1:], S[1:, 0]
+    try:
+        L = np.linalg.cholesky(Sxx)
+        beta = np.linalg.solve(L.T, np.linalg.solve(L, Sxy))
+        Li = np.linalg.inv(L)
+        inv = Li.T @ Li
+    except np.linalg.LinAlgError:  # collinear columns: minimum-norm solution
+        inv = np.linalg.pinv(Sxx, hermitian=True)
+        beta = inv @ Sxy
+    nobs = float(mask.sum())
+    s2 = max(float(S[0, 0] - Sxy @ beta), 1e-300) / nobs
+    ll = -0.5 * (nobs * np.log(2 * np.pi * s2) + float(np.sum(mask * np.log(F))) + nobs)
+    return float(ll), beta, s2 * inv, s2
+
+
+@partial(jax.jit, static_argnums=0)
+def _negll_and_grad(spec, theta, y, X, mask, w, pad):
+    def f(th):
+        phi, q, p0 = system(spec, unpack(spec, th))
+        Y = jnp.concatenate([y[:, None], X], axis=1) * mask[:, None]
+        V, F = _filter(phi, q, p0, Y, mask, w)
+        return -_profile(V, F, mask, pad)[0]
+    return jax.value_and_grad(f)(theta)
+
+
+def pad_columns(X: np.ndarray, multiple: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Pad X with zero columns to a multiple of ``multiple`` (one compiled shape per size)."""
+    X = np.asarray(X, dtype=float)
+    p = X.shape[1]
+    P = max(multiple, int(math.ceil(p / multiple)) * multiple)
+    Xp = np.zeros((X.shape[0], P))
+    Xp[:, :p] = X
+    pad = np.zeros(P)
+    pad[p:] = 1.0
+    return Xp, pad
+
+
+class NoiseFit(NamedTuple):
+    """Maximum-likelihood noise fit: spec, theta (unconstrained), the GLS at theta, p."""
+
+    spec: NoiseSpec
+    theta: np.ndarray
+    loglik: float
+    beta: np.ndarray
+    cov_beta: np.ndarray
+    sigma2: float
+    converged: bool
+    n_params: int
+
+
+def _starts(spec: NoiseSpec, theta0) -> np.ndarray:
+    """A small grid of starting points (the likelihood can have several modes)."""
+    if theta0 is not None:
+        return np.atleast_2d(np.asarray(theta0, float))
+    grid = []
+    for lf in (-6.0, -2.0, 1.0):
+        for lrw in (-14.0, -8.0, -3.0):
+            row = []
+            if spec.bank_taus:
+                row.append(lf)
+            if spec.random_walk:
+                row.append(lrw)
+            for j in range(spec.n_markov):
+                row.append(-1.0)
+            for j in range(spec.n_markov):
+                row.append(math.log(max(30.0 * spec.dt * 4 ** j, spec.dt)))
+            grid.append(row)
+    g = np.unique(np.asarray(grid, float), axis=0)
+    return g
+
+
+def _diverse(starts: np.ndarray, vals: np.ndarray, k: int, gap: float = 3.0) -> list[np.ndarray]:
+    """Up to k starts, best first, each differing by > ``gap`` (log units) from those taken."""
+    out: list[np.ndarray] = []
+    for i in np.argsort(vals):
+        if not np.isfinite(vals[i]):
+            break
+        if all(np.max(np.abs(starts[i] - o)) > gap for o in out):
+            out.append(starts[i])
+        if len(out) == k:
+            break
+    return out or [starts[0]]
+
+
+def fit_noise(spec: NoiseSpec, y, X, mask=None, w=None, *, theta0=None,
+              extra_starts=None, maxiter: int = 200, n_starts: int = 3) -> NoiseFit:
+    """Maximum-likelihood noise hyperparameters with beta and s2 profiled out (L-BFGS-B).
+
+    Args:
+        spec: noise structure; y (n,) block means; X (n, p) design (centred/scaled).
+        mask: (n,) 1 observed / 0 missing block; w: (n,) white-variance weights.
+        theta0: start (skips the start grid); extra_starts: more candidate starts.
+    """
+    y = np.asarray(y, float)
+    n = y.size
+    mask = np.ones(n) if mask is None else np.asarray(mask, float)
+    w = np.ones(n) if w is None else np.asarray(w, float)
+    Xp, pad = pad_columns(X)
+    args = tuple(jnp.asarray(a) for a in (np.where(mask > 0, y, 0.0), Xp, mask, w, pad))
+    p = int(X.shape[1])
+    if spec.n_theta == 0:
+        r = gls(spec, np.zeros(0), y, X, mask, w)
+        return NoiseFit(spec, np.zeros(0), r.loglik, r.beta, r.cov_beta, r.sigma2, True, p)
+    starts = _starts(spec, theta0)
+    if extra_starts is not None:
+        starts = np.vstack([starts, np.atleast_2d(extra_starts)])
+    lo, hi = np.array(bounds(spec)).T
+    starts = np.clip(starts, lo, hi)
+    vals = np.array([float(_negll_and_grad(spec, jnp.asarray(th), *args)[0]) for th in starts])
+    vals = np.where(np.isfinite(vals), vals, np.inf)
+
+    def fun(th):
+        v, g = _negll_and_grad(spec, jnp.asarray(th), *args)
+        v, g = float(v), np.asarray(g, dtype=float)
+        if not np.isfinite(v) or not np.all(np.isfinite(g)):
+            return 1e300, np.zeros_like(th)
+        return v, g
+
+    # The likelihood is often bimodal (a random walk or the flicker bank explaining the same
+    # slow wander): optimise from the best start of each distinct region, keep the best.
+    best = None
+    for x0 in _diverse(starts, vals, n_starts):
+        r = optimize.minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds(spec),
+                              options={"maxiter": maxiter})
+        if best is None or r.fun < best.fun:
+            best = r
+    res = best
+    theta = np.asarray(res.x)
+    r = gls(spec, theta, y, X, mask, w)
+    return NoiseFit(spec, theta, r.loglik, r.beta, r.cov_beta, r.sigma2,
+                    bool(np.isfinite(res.fun)), p)
+
+
+@partial(jax.jit, static_argnums=0)
+def whiten_raw(spec: NoiseSpec, theta, Y, mask, w):
+    """Raw innovations (n, C) and relative variances F (n,) of the columns of Y."""
+    phi, q, p0 = system(spec, unpack(spec, theta))
+    return _filter(phi, q, p0, Y * mask[:, None], mask, w)
+
+
+def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
+    """:func:`whiten_raw` with the columns zero-padded to a power of four (>= ``minimum``).
+
+    Few distinct shapes means few compilations (a compile costs seconds, a pass over a
+    few thousand blocks milliseconds). Returns NumPy (V (n, C), F (n,)).
+    """
+    Y = np.asarray(Y, float)
+    c = Y.shape[1]
+    C = max(minimum, 4 ** int(math.ceil(math.log(max(c, 1), 4) - 1e-9)))
+    Yp = np.zeros((Y.shape[0], C))
+    Yp[:, :c] = Y
+    V, F = whiten_raw(spec, jnp.asarray(theta, dtype=float), jnp.asarray(Yp),
+                      jnp.asarray(mask, dtype=float), jnp.asarray(w, dtype=float))
+    return np.asarray(V)[:, :c], np.asarray(F)
+
+
+def whiten(spec: NoiseSpec, theta, Y, mask, w):
+    """Whitened columns L^-1 Y (n, C): innovations / sqrt(F), 0 at missing blocks."""
+    V, F = filter_padded(spec, theta, Y, mask, w)
+    return V * (np.asarray(mask) / np.sqrt(F))[:, None], F
+
+
+def pointwise_loglik(spec: NoiseSpec, theta, y, X, mask, w, betas, sigma2) -> np.ndarray:
+    """One-step-ahead predictive log densities log p(y_t | y_<t, beta_s) for draws betas (S, p).
+
+    Returns (S, n_obs): the pointwise log-likelihood ArviZ needs for WAIC / PSIS-LOO.
+    """
+    mask = np.asarray(mask, float)
+    Y = np.column_stack([np.where(mask > 0, y, 0.0), X])
+    V, F = filter_padded(spec, theta, Y, mask, w)
+    obs = mask > 0
+    r = V[obs, :1].T - np.asarray(betas) @ V[obs, 1:].T  # (S, n_obs) innovations
+    f = sigma2 * F[obs]
+    return -0.5 * (np.log(2 * np.pi * f)[None, :] + r * r / f[None, :])

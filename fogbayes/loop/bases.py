@@ -1,0 +1,112 @@
+"""Base models the loop starts from, as term lists, and which effects each may gain.
+
+    bias-t     b = c0 + sum_{k<=n} c_k T'^k                       (n = 2 by default, paper 004)
+    thermal    bias-t + sum_{j<=2} d_j (dT/dt)'^j                 (paper 004, eq. 14)
+    composite  U = S1(T) S2(W) W + U0(T) [+ U1(T) t]  linearised  (paper 000); orders
+               "s1,s2,u0[,u1]" give W' T'^i (i <= s1), W'^(j+1) (j <= s2), T'^i (i <= u0),
+               t' T'^i (i <= u1). Default "0,0,2": a linear scale factor and a quadratic
+               bias, so every scale-factor effect is something the loop can find.
+    allan      a constant bias; the noise model (white + flicker + random walk) is the
+               five-term model, and the loop may add only noise terms: a Gauss-Markov
+               component or a sinusoid (``markov_noise``, ``periodic``).
+
+T' = (T - centre) / scale and W' = W / max|W| (centred, scaled bases). On a soaked
+record (T spans < 0.1 deg C) the temperature terms are left out: no T law is identifiable.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..diagnose.candidates import EFFECTS
+from ..diagnose.context import Context
+from ..diagnose.terms import Term
+from ..errors import FogbayesError, MissingColumnError
+
+MODELS = ("bias-t", "thermal", "composite", "allan")
+
+#: Effects the loop may add to each base model.
+ALLOWED = {
+    "bias-t": EFFECTS,
+    "thermal": EFFECTS,
+    "composite": EFFECTS,
+    "allan": ("markov_noise", "periodic"),
+}
+
+
+class ModelNameError(FogbayesError):
+    """An unknown base model name or malformed orders."""
+
+
+def _tscale(ctx: Context) -> tuple[float, float]:
+    T = ctx.cov.T[:, 0]
+    return 0.5 * (float(T.max()) + float(T.min())), max(0.5 * float(np.ptp(T)), 1e-3)
+
+
+def _need_temperature(ctx: Context, model: str, source) -> None:
+    if ctx.cov.n_temps == 0:
+        raise MissingColumnError(f"model '{model}' needs a temperature channel", file=source,
+                                 column="temperature",
+                                 fix="add a 'temperature' column (deg C) or use --model allan")
+
+
+def parse_orders(model: str, orders: str | None) -> tuple[int, ...]:
+    """Orders for a base model: bias-t/thermal "n" (T order); composite "s1,s2,u0[,u1]"."""
+    default = {"bias-t": (2,), "thermal": (2,), "composite": (0, 0, 2), "allan": ()}[model]
+    if orders is None:
+        return default
+    try:
+        vals = tuple(int(v) for v in str(orders).split(","))
+    except ValueError:
+        vals = ()
+    ok = (len(vals) == 1 if model in ("bias-t", "thermal") else
+          len(vals) in (3, 4) if model == "composite" else len(vals) == 0)
+    if not ok or any(v < 0 or v > 6 for v in vals):
+        raise ModelNameError(f"orders {orders!r} do not fit model '{model}'", column="orders",
+                             fix="bias-t/thermal: one integer (e.g. 2); composite: "
+                                 "s1,s2,u0[,u1] (e.g. 0,0,2); allan: none")
+    return vals
+
+
+def base_terms(ctx: Context, model: str, orders: str | None = None, *, source=None) -> list[Term]:
+    """The term list of base ``model`` on this recording."""
+    if model not in MODELS:
+        raise ModelNameError(f"unknown model '{model}'", column="model",
+                             fix=f"use one of {', '.join(MODELS)}")
+    o = parse_orders(model, orders)
+    terms = [Term("intercept", {"effect": "base"})]
+    if model == "allan":
+        return terms
+    _need_temperature(ctx, model, source)
+    c, s = _tscale(ctx)
+    varies = float(np.ptp(ctx.cov.T[:, 0])) >= 0.1  # deg C; a soaked record has no T law
+    if model in ("bias-t", "thermal"):
+        if o[0] > 0 and varies:
+            terms.append(Term("tpoly", {"effect": "base", "channel": 0,
+                                        "powers": list(range(1, o[0] + 1)), "centre": c, "scale": s}))
+        if model == "thermal":
+            rs = max(float(np.max(np.abs(ctx.cov.Tdot))), 1e-3)
+            terms.append(Term("rate_poly", {"effect": "base", "powers": [1, 2], "scale": rs}))
+        return terms
+    if ctx.cov.omega is None:
+        raise MissingColumnError("model 'composite' needs the reference input rate", file=source,
+                                 column="input_rate", fix="add an 'input_rate' column (deg/s)")
+    s1, s2, u0 = o[:3]
+    ws = max(float(np.max(np.abs(ctx.cov.omega))), 1e-9)
+    # S1(T) S2(W) W linearised: every T'^i W'^(j+1), i <= s1, j <= s2 (paper 000's full M)
+    terms.append(Term("omega_poly", {"effect": "base", "powers": list(range(1, s2 + 2)),
+                                     "scale": ws}))
+    for i in range(1, s1 + 1 if varies else 1):
+        for j in range(s2 + 1):
+            terms.append(Term("omega_tpoly", {"effect": "base", "channel": 0, "powers": [i],
+                                              "wpower": j + 1, "centre": c, "t_scale": s,
+                                              "scale": ws}))
+    if u0 > 0 and varies:
+        terms.append(Term("tpoly", {"effect": "base", "channel": 0,
+                                    "powers": list(range(1, u0 + 1)), "centre": c, "scale": s}))
+    if len(o) == 4 and varies:
+        op = ctx.cov.op_time if ctx.cov.op_time is not None else ctx.cov.t
+        terms.append(Term("drift_tpoly", {"effect": "base", "channel": 0,
+                                          "powers": list(range(0, o[3] + 1)), "centre": c,
+                                          "scale": s, "duration": max(float(np.max(op)), 1.0)}))
+    return terms

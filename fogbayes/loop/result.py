@@ -1,0 +1,90 @@
+"""Typed results of the closed loop and their JSON form (DESIGN.md contract).
+
+``LoopResult.to_json()`` returns exactly::
+
+    {"model": ..., "initial": {"rms", "bias_stability", "elpd"},
+     "steps": [{"effect", "covariates", "detail", "evidence", "rms_before", "rms_after"}],
+     "final": {"rms", "bias_stability", "elpd"}, "unexplained": [{"kind", "detail"}]}
+
+(rms and bias stability in deg/h, elpd in nats of the block-mean predictive density).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..diagnose.context import Context
+from ..diagnose.fitting import ModelFit
+from ..diagnose.terms import Term
+from .metrics import Metrics
+
+
+def to_jsonable(obj: Any) -> Any:
+    """NumPy scalars/arrays to plain Python; NaN/inf to None (valid JSON)."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        f = float(obj)
+        return f if np.isfinite(f) else None
+    return obj
+
+
+class Step(NamedTuple):
+    """One addition: the effect, its term, the evidence for it and the metrics after it."""
+
+    effect: str
+    covariates: tuple[str, ...]
+    term: Term
+    detail: dict[str, Any]
+    evidence: dict[str, Any]
+    rms_before: float
+    rms_after: float
+    metrics_after: Metrics
+    fit: ModelFit
+
+
+class Rejected(NamedTuple):
+    """Why the loop stopped: the best remaining candidate and its evidence."""
+
+    reason: str
+    evidence: dict[str, Any]
+
+
+class LoopResult(NamedTuple):
+    """Everything the loop did (see module doc); ``fit`` is the final model."""
+
+    model: str
+    initial: Metrics
+    steps: list[Step]
+    final: Metrics
+    unexplained: list[dict[str, Any]]
+    fit: ModelFit
+    initial_fit: ModelFit
+    stop: Rejected
+    context: Context
+    compensated: dict[str, np.ndarray]
+    rule: str
+
+    @property
+    def effects(self) -> list[str]:
+        return [s.effect for s in self.steps]
+
+    def to_json(self) -> dict[str, Any]:
+        def m(x: Metrics) -> dict:
+            return {"rms": x.rms, "bias_stability": x.bias_stability, "elpd": x.elpd}
+
+        steps = [{"effect": s.effect, "covariates": list(s.covariates), "detail": s.detail,
+                  "evidence": s.evidence, "rms_before": s.rms_before, "rms_after": s.rms_after}
+                 for s in self.steps]
+        return to_jsonable({"model": self.model, "initial": m(self.initial), "steps": steps,
+                            "final": m(self.final), "unexplained": self.unexplained})

@@ -1,0 +1,109 @@
+"""Undeclared-effect test recordings for the closed loop (tests and benchmarks).
+
+A thin layer over the simulator's scenarios (:func:`fogbayes.simulate.scenarios.simulate`):
+the scenario's own model is what the base model declares (``thermal``/``paper004``
+scenarios with a quadratic bias in T for ``bias-t``; ``ratetable`` with a linear scale and
+a quadratic bias for ``composite``), and at most one effect is planted on top at
+``magnitude`` x its registry default. ``temperature_order`` plants a cubic coefficient on
+top of the scenario's quadratic. ``oracle_terms`` gives the true model as loop terms, so
+a test can fit the oracle the same way the loop fits its own models.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..data import Recording
+from ..diagnose.terms import Term
+from ..simulate.registry import EFFECTS
+from ..simulate.scenarios import simulate
+
+#: Noise mixes (canonical units: N deg/sqrt(h), B deg/h, K deg/h^1.5); "default" keeps the
+#: scenario's own (thermal: N 0.005, B 0.02, K 0.02).
+NOISE_MIXES = {
+    "default": None,
+    "fog": dict(N=0.003, B=0.02, K=0.01),
+    "white": dict(N=0.004),
+    "flicker": dict(N=0.002, B=0.05),
+    "walk": dict(N=0.003, B=0.01, K=0.05),
+}
+
+#: Parameters that set an effect's size (scaled by ``magnitude``).
+_SIZE_KEYS = ("coeff", "size", "amplitude", "slope", "k2", "k3", "asymmetry", "sigma")
+_SCENARIO = {"thermal": "thermal", "paper004": "paper004", "ratetable": "ratetable"}
+
+
+class TestRecord(NamedTuple):
+    recording: Recording
+    effect: str | None
+    effect_params: dict
+    effects: dict          # name -> deterministic part (deg/h), the scenario's own included
+    noise: np.ndarray
+
+
+def _scaled(name: str, magnitude: float, params: dict | None) -> dict:
+    base = {k: v for k, v in EFFECTS[name].defaults.items()}
+    out = {}
+    for k in _SIZE_KEYS:
+        if k in base and base[k] is not None:
+            out[k] = magnitude * base[k]
+    if name == "temperature_order":  # the scenario's quadratic plus a cubic term
+        out = {"coeffs": [0.5, 0.01, 2e-4, magnitude * base["coeffs"][3]], "T_ref": 20.0}
+    out.update(params or {})
+    return out
+
+
+def make_record(effect: str | None = None, *, seed: int, duration: float = 3 * 3600.0,
+                fs: float = 10.0, magnitude: float = 1.0, noise: str | dict = "default",
+                effect_params: dict | None = None, temp_noise: float = 0.01,
+                profile: str = "thermal") -> TestRecord:
+    """A simulated recording with ``effect`` present (None: clean) on top of the scenario.
+
+    profile: "thermal" (generic heating/cooling test), "paper004" (room, -40, +60, room at
+    1 deg C/min, soaks sized to ``duration``; its Shupe term is switched off so that the
+    declared model is the quadratic bias) or "ratetable" (paper 000's grid).
+    """
+    opts: dict = {}
+    effects: dict = {}
+    if profile == "paper004":
+        opts = {"soak": max((duration - 12000.0) / 4.0, 600.0), "ramp_rate": 1.0}
+        effects["paper004"] = None
+        effects["temperature_order"] = {"coeffs": [0.5, 0.01, 2e-4], "T_ref": 20.0}
+    if effect is not None:
+        effects[effect] = _scaled(effect, magnitude, effect_params)
+    mix = NOISE_MIXES[noise] if isinstance(noise, str) else dict(noise)
+    sim = simulate(_SCENARIO[profile], seed=seed, fs=fs,
+                   duration=None if profile == "paper004" else duration, effects=effects,
+                   noise=mix, temperature_noise=temp_noise, **opts)
+    tr = sim.truth
+    params = tr.params["effects"].get(effect, {}) if effect else {}
+    return TestRecord(sim.recording, effect, params, dict(tr.effects), tr.noise)
+
+
+def oracle_terms(ctx, base, effect: str, params: dict):
+    """The true model as loop terms (base + the planted effect at its true parameters)."""
+    T = ctx.cov.T[:, 0]
+    c, s = 0.5 * (T.max() + T.min()), max(0.5 * np.ptp(T), 1e-3)
+    ws = max(float(np.max(np.abs(ctx.cov.omega))), 1e-9) if ctx.cov.omega is not None else 1.0
+    extra = {
+        "temperature_order": [Term("tpoly", {"channel": 0, "powers": [3], "centre": c,
+                                             "scale": s})],
+        "temperature_rate": [Term("rate", {"scale": 1.0})],
+        "temperature_gradient": [Term("gradient", {"a": 0, "b": 1, "scale": 1.0})],
+        "thermal_hysteresis": [Term("hysteresis", {"r0": params.get("rate_scale", 0.05)})],
+        "thermal_lag": [Term("lag", {"channel": 0, "tau": params.get("tau", 1800.0),
+                                     "centre": c, "scale": s})],
+        "time_drift": [Term("drift_exp", {"tau": params.get("tau", 5400.0)})]
+        + ([Term("drift_lin", {"duration": ctx.cov.duration})] if params.get("slope") else []),
+        "periodic": [Term("periodic", {"frequency": params.get("frequency", 1 / 600)})],
+        "step": [Term("step", {"time": params.get("time", 0.0)})],
+        "scale_factor_nonlinearity": [Term("omega_poly", {"powers": [2, 3], "scale": ws})],
+        "scale_factor_asymmetry": [Term("omega_abs", {"scale": ws})],
+        "scale_factor_temperature": [Term("omega_tpoly", {"channel": 0, "powers": [1],
+                                                          "centre": c, "t_scale": s,
+                                                          "scale": ws})],
+        "markov_noise": [],
+    }[effect]
+    return list(base) + extra
