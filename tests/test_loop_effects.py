@@ -4,8 +4,10 @@ Each case is a short simulated test (fixed seed) with one effect present but not
 base model: the loop must add that effect first and end within 10 % of the oracle's
 10 s-block RMS (the true model fitted the same way); clean records must get nothing.
 The full study (several seeds, magnitudes 1-2x, four noise mixes, 1-10 Hz, 3-6 h) is in
-benchmarks/RESULTS_loop.md; measured there: right effect first in RIGHT_RATE of the
-effect cases, nothing added on CLEAN_RATE of the clean ones. Here every case passes with
+benchmarks/RESULTS_loop.md; measured there: right effect first in 106 of 114 effect
+records (93 %; markov_noise at 1-2x its default: 3 of 12; gradient vs lag is the main
+confusion), final RMS within 10 % of the oracle in 126 of 126, nothing added on 18 of 18
+clean records. Here every case passes with
 its fixed seed; records are short (3 h at 1 Hz) and effects 2-3x the simulator's
 defaults so that one seed is a fair test of the method, not of luck. Records come from
 the simulator's scenarios (fogbayes.loop.testbed wraps fogbayes.simulate.simulate).
