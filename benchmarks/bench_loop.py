@@ -86,7 +86,8 @@ def cases(quick: bool) -> list[dict]:
 
 
 def summarise(rows: list[dict]) -> str:
-    lines = ["| effect | base | cases | right first | nothing added | final/oracle RMS (median, max) | within 10 % |",
+    lines = ["| effect | base | cases | right first | nothing added "
+             "| final/oracle RMS (median, max) | within 10 % |",
              "|---|---|---|---|---|---|---|"]
     key = lambda r: (str(r["effect"]), r["model"])  # noqa: E731
     for (eff, model), grp in itertools.groupby(sorted(rows, key=key), key=key):

@@ -137,7 +137,8 @@ def rate_data(rec: Recording, *, convention: str = "cell", schedule=None, table=
     rows = np.concatenate([np.arange(c.start, c.stop) for c in table.cells])
     cell = np.concatenate([np.full(c.stop - c.start, k) for k, c in enumerate(table.cells)])
     data = RateData(U=np.asarray(rec.output[rows], float), T=np.asarray(rec.temperature[rows]),
-                    W=np.asarray(W_all[rows], float), t=t_all[rows], cell=cell, row=rows, time=np.asarray(rec.time[rows]),
+                    W=np.asarray(W_all[rows], float), t=t_all[rows], cell=cell, row=rows,
+                    time=np.asarray(rec.time[rows]),
                     cell_i=np.array([c.i for c in table.cells]),
                     cell_j=np.array([c.j for c in table.cells]),
                     temperature_levels=np.asarray(table.temperature_levels, float),

@@ -92,11 +92,18 @@ def test_jax_matches_plain_numpy_and_compiles_once():
     res = comp(U, TG, TT)
     np.testing.assert_allclose(res.rate, ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(res.in_range, ok)
-    before = compensate._cache_size()
-    comp(U * 1.0001, TG, TT)  # new values, same shapes/static args: no recompilation
+    before = comp.fn._cache_size()
+    comp(U * 1.0001, TG, TT)  # new values, same shapes: the baked-in compensator is reused
+    assert comp.fn._cache_size() == before == 1
+    # the argument form compiles once for any coefficients of the same orders
+    box = jnp.asarray(comp.box)
+    compensate(P, SC, box, U, TG, TT, method="halley", iterations=2)
+    n0 = compensate._cache_size()
     P2 = from_raw(PAPER_000._replace(c=PAPER_000.c + 0.1), SC)
-    compensate(P2, SC, jnp.asarray(comp.box), U, TG, TT, method="halley", iterations=2)
-    assert compensate._cache_size() == before
+    res2 = compensate(P2, SC, box, U, TG, TT, method="halley", iterations=2)
+    assert compensate._cache_size() == n0
+    np.testing.assert_allclose(compensate(P, SC, box, U, TG, TT).rate, res.rate, rtol=1e-13)
+    assert not np.allclose(res2.rate, res.rate)
 
 
 def test_vmap_over_sensors_equals_a_loop():
@@ -121,6 +128,7 @@ def test_outputs_beyond_the_fold_are_flagged():
     U_far = np.r_[raw_predict(PAPER_000, 20.0, 60.0, 0.0), peak * 1.05]
     res = comp(U_far, T20, np.zeros(3))
     assert res.in_range.tolist() == [True, False, False]
+    assert np.isnan(res.rate[1:]).all()  # no valid inverse: NaN, the row kept and flagged
     np.testing.assert_allclose(res.rate[0], 60.0, rtol=1e-9)
 
 

@@ -21,8 +21,8 @@ TRUTH = np.concatenate([PAPER_000.M.ravel(), PAPER_000.c, PAPER_000.d])
 
 
 def _data(seed, noise=None, dwell=20.0, **kw):
-    sim = simulate("paper000", seed=seed, dwell=dwell, **({} if noise is None else {"noise": noise}),
-                   **kw)
+    extra = {} if noise is None else {"noise": noise}
+    sim = simulate("paper000", seed=seed, dwell=dwell, **extra, **kw)
     # smooth_s=5: the simulated chamber steps at once, so a short temperature-steadiness
     # window keeps every 20 s cell (the 60 s default drops cells next to a step)
     return rate_data(sim.recording, smooth_s=5.0)[0], sim
@@ -100,7 +100,8 @@ def test_ar_prewhitening_recovers_phi():
     r = np.random.default_rng(0).standard_normal(50)
     cell = np.repeat([0, 1], 25)
     e = prewhiten(r, cell, np.array([0.5]))
-    assert e.size == 48 and np.isclose(e[0], r[1] - 0.5 * r[0]) and np.isclose(e[24], r[26] - 0.5 * r[25])
+    assert e.size == 48 and np.isclose(e[0], r[1] - 0.5 * r[0])
+    assert np.isclose(e[24], r[26] - 0.5 * r[25])  # the first sample of cell 1 is dropped
     assert yule_walker_cells(r, cell, 2).shape == (2,)
 
 
@@ -146,7 +147,8 @@ def test_cell_noise_gives_back_ols_on_white_data():
 def test_joint_and_classification_intervals_cover_the_truth():
     """90 % intervals over 16 seeds x 18 coefficients, default noise (white + bias
     instability B = 0.2 deg/h). Measured on this CI size: joint GLS 0.875 (white-noise
-    OLS would give 0.858), classification 0.913; fuller study (60 seeds, dwell 60 s) in benchmarks/RESULTS_composite.md."""
+    OLS would give 0.858), classification 0.913; fuller study (60 seeds, dwell 60 s) in
+    benchmarks/RESULTS_composite.md."""
     zj, zc = [], []
     for seed in range(16):
         d, _ = _data(100 + seed)

@@ -21,9 +21,11 @@ from ._common import REC_ARG, load_recording, progress, say, write_json
 @app.command(name="loop")
 def loop(
     rec_path: Path = REC_ARG,
-    model: str = typer.Option(..., "--model", "-m", help="Base model: bias-t | thermal | composite | allan."),
+    model: str = typer.Option(..., "--model", "-m",
+                              help="Base model: bias-t | thermal | composite | allan."),
     json_out: str = typer.Option(..., "--json", help="Loop document to write ('-' = stdout)."),
-    compensated: Path = typer.Option(..., "--compensated", help="Compensated CSV to write (every input row)."),
+    compensated: Path = typer.Option(..., "--compensated",
+                                     help="Compensated CSV to write (every input row)."),
     max_steps: int = typer.Option(5, "--max-steps", min=0, help="Add at most this many effects."),
     report: Path = typer.Option(None, "--report", help="Also write an HTML report of the loop."),
     orders: str = typer.Option(None, "--orders", help="Base orders: bias-t/thermal 'n' (default 2); "

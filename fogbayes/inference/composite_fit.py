@@ -35,7 +35,7 @@ from ..models.composite import (FullParams, Orders, ProductParams, Scaling, desi
 
 
 class LsqFit(NamedTuple):
-    """A full-matrix least-squares fit (scaled units; see :func:`~fogbayes.models.composite.to_raw`)."""
+    """A full-matrix least-squares fit (scaled units; raw ones by ``composite.to_raw``)."""
 
     params: FullParams
     scaling: Scaling

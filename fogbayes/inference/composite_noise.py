@@ -113,7 +113,8 @@ def sigma_inverse(N: np.ndarray, gaps: np.ndarray, lam: float, rho: float):
     def apply(v):
         Nv = N.reshape((-1,) + (1,) * (v.ndim - 1)) * v
         if lam * np.median(N) <= 1.0:
-            return Nv - lam * N.reshape((-1,) + (1,) * (v.ndim - 1)) * cho_solve_banded((cb, False), Nv)
+            Nb = N.reshape((-1,) + (1,) * (v.ndim - 1))
+            return Nv - lam * Nb * cho_solve_banded((cb, False), Nv)
         q = Qv(v)
         return (q - Qv(cho_solve_banded((cb, False), q))) / lam
 

@@ -81,7 +81,7 @@ class FullParams(NamedTuple):
 
 
 class ProductParams(NamedTuple):
-    """Rank-1 parameterisation in scaled units: M' = a' [1, b'_1 .. b'_s2]^T (a' (s1+1,), b' (s2,))."""
+    """Rank-1 form in scaled units: M' = a' [1, b'_1 .. b'_s2]^T; a' (s1+1,), b' (s2,)."""
 
     a: jnp.ndarray
     b: jnp.ndarray
@@ -217,7 +217,8 @@ def unpack(theta, orders: Orders) -> FullParams:
 def param_labels(orders: Orders) -> list[str]:
     """Names of the raw coefficients in pack order, e.g. ``M[1,2]`` = coefficient of T W^3."""
     out = [f"M[{i},{j}]" for i in range(orders.s1 + 1) for j in range(orders.s2 + 1)]
-    return out + [f"c[{i}]" for i in range(orders.u0 + 1)] + [f"d[{i}]" for i in range(orders.u1 + 1)]
+    out += [f"c[{i}]" for i in range(orders.u0 + 1)]
+    return out + [f"d[{i}]" for i in range(orders.u1 + 1)]
 
 
 # ------------------------------------------------------------------------------ raw <-> scaled

@@ -68,25 +68,30 @@ def _unflatten(vec, orders: Orders) -> dict:
             "d": list(map(float, vec[nm + orders.u0 + 1:]))}
 
 
-def _fit(data, orders, method, noise, bayes, seed, options):
-    """(theta scaled, cov, sigma, noise document, extra document, scaling)."""
+def _fit(data, orders, method, noise):
+    """(theta scaled, cov, sigma, noise document, extra document, scaling, converged)."""
+    import jax
     import jax.numpy as jnp
 
+    from ..inference.composite_fit import _vector_to_theta
     from ..models.composite import pack
 
     if method == "classification":
+        from scipy import stats
+
         cf = classify_fit(data, orders=orders)
+        # d comes from a fit to n_T values U1(T_i): Student-t intervals on its dof
+        dof_d = int(np.isfinite(cf.U1_levels).sum()) - orders.u1 - 1
+        z = np.full(cf.cov.shape[0], stats.norm.ppf(0.95))
+        z[-(orders.u1 + 1):] = stats.t.ppf(0.95, dof_d)
         return (np.asarray(pack(cf.params)), cf.cov, float("nan"),
-                {"model": "cells (stage 2) / white (U1)"}, {}, cf.scaling, True)
+                {"model": "cells (stage 2) / white (U1)", "z90": z.tolist()}, {}, cf.scaling,
+                True)
     if method == "product":
         pf = fit_optax(data, orders, form="product")
         full = product_to_full(pf.params)
         theta = np.asarray(pack(FullParams(*(jnp.asarray(v) for v in full))))
         # covariance of the full-matrix coefficients through the rank-1 map (delta method)
-        import jax
-
-        from ..inference.composite_fit import _vector_to_theta
-
         v = jnp.concatenate(list(pf.params))
         Jm = np.asarray(jax.jacfwd(_vector_to_theta)(v, orders, "product"))
         return (theta, Jm @ pf.cov @ Jm.T, pf.sigma, {"model": "white"},
@@ -127,9 +132,9 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
     if want is None:
         selection = select_orders(data, criterion=order_criterion, seed=seed)
         want = selection.orders
-    theta, cov, sigma, noise_doc, extra, sc, ok = _fit(data, want, method, noise, bayes, seed,
-                                                       options)
-    raw, sd, lo, hi = _interval(theta, cov, want, sc)
+    theta, cov, sigma, noise_doc, extra, sc, ok = _fit(data, want, method, noise)
+    raw, sd, lo, hi = _interval(theta, cov, want, sc,
+                                np.asarray(noise_doc.get("z90", 1.6448536269514722)))
     doc = {
         "model": "composite", "fogbayes_version": fogbayes.__version__, "method": method,
         "input": {"unit": rec.unit, "scale_factor": rec.scale_factor},
