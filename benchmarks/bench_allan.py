@@ -25,19 +25,11 @@ import jax
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
+from _timing import best_of  # benchmarks/ is on sys.path when a script runs
 from fogbayes.stats.allan_kernels import allan_variance
 from fogbayes.stats.taus import cluster_sizes
 
 allantools = __import__("allantools")
-
-
-def best_of(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def ours(Y, ms):

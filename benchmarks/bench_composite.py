@@ -37,17 +37,9 @@ import jax.numpy as jnp
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
+from _timing import best_of  # benchmarks/ is on sys.path when a script runs
 from fogbayes.compensate_composite import build_compensator, compensate_numpy, compensate_sensors
 from fogbayes.models.composite import PAPER_000, PAPER_ORDERS, Scaling, from_raw, raw_predict
-
-
-def best_of(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def _stream_time(comp, U, T, t, repeat: int) -> float:

@@ -32,21 +32,13 @@ import jax
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
+from _timing import best_of  # benchmarks/ is on sys.path when a script runs
 from fogbayes.compensate import compensate_bias
 from fogbayes.inference.lsq import lstsq, lstsq_gram
 from fogbayes.metrics import bias_stability
 from fogbayes.simulate import simulate
 from fogbayes.simulate.noise import markov_noise
 from fogbayes.workflow.thermal import compensate_recording, fit_recording
-
-
-def best_of(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
 
 
 def _timed(fn):

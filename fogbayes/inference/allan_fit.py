@@ -30,14 +30,13 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
-from jax import lax
 from scipy import optimize, stats
 
 from ..models.allan import (
     _A_PER_P2, POWERS, TERMS, UNITS, AllanParams, params_from_coefficients,
 )
 from .allan_data import AllanFitData, log_moments, model_moments, restrict
+from .lsq import lbfgs_scan
 
 Z90 = float(stats.norm.ppf(0.95))
 CHI2_90 = float(stats.chi2.ppf(0.9, 1))
@@ -114,16 +113,7 @@ def _loss(logp, mask, tau, target, prec, loc):
 def _minimise(logp0, mask, tau, target, prec, loc, steps: int = _STEPS):
     """L-BFGS in one lax.scan; returns the parameters, loss trace and final gradient norm."""
     fun = partial(_loss, mask=mask, tau=tau, target=target, prec=prec, loc=loc)
-    opt = optax.lbfgs()
-    vg = optax.value_and_grad_from_state(fun)
-
-    def step(carry, _):
-        x, state = carry
-        value, grad = vg(x, state=state)
-        updates, state = opt.update(grad, state, x, value=value, grad=grad, value_fn=fun)
-        return (optax.apply_updates(x, updates), state), value
-
-    (x, _), trace = lax.scan(step, (logp0, opt.init(logp0)), None, length=steps)
+    x, trace = lbfgs_scan(fun, logp0, steps=steps)
     return x, trace, jnp.linalg.norm(jax.grad(fun)(x) * mask)
 
 

@@ -32,6 +32,7 @@ from ..composite_cells import RateData
 from ..errors import FogbayesError, TooShortError
 from ..models.composite import (FullParams, Orders, ProductParams, Scaling, design_matrix,
                                 full_to_product, n_params, pack, product_to_full, unpack)
+from .lsq import lbfgs_scan
 
 
 class LsqFit(NamedTuple):
@@ -188,22 +189,11 @@ def _vector_to_theta(v, orders: Orders, form: str):
 @partial(jax.jit, static_argnames=("orders", "form", "steps"))
 def _lbfgs(v0, X, y, *, orders: Orders, form: str, steps: int):
     """L-BFGS on 0.5 mean((y - X theta(v))^2), ``steps`` iterations in one lax.scan."""
-    import optax
-
     def loss(v):
         r = y - X @ _vector_to_theta(v, orders, form)
         return 0.5 * jnp.mean(r * r)
 
-    opt = optax.lbfgs()
-    vg = optax.value_and_grad_from_state(loss)
-
-    def step(carry, _):
-        v, state = carry
-        value, grad = vg(v, state=state)
-        upd, state = opt.update(grad, state, v, value=value, grad=grad, value_fn=loss)
-        return (optax.apply_updates(v, upd), state), value
-
-    (v, _), trace = jax.lax.scan(step, (v0, opt.init(v0)), None, length=steps)
+    v, trace = lbfgs_scan(loss, v0, steps=steps)
     return v, loss(v), jnp.linalg.norm(jax.grad(loss)(v)), trace
 
 

@@ -175,6 +175,26 @@ def minimize(loss_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
                           (gnorm < 10 * tol) & jnp.isfinite(value))
 
 
+def lbfgs_scan(loss_fn: Callable[[Any], Array], init: Any, *, steps: int):
+    """A fixed number of optax L-BFGS steps in one ``lax.scan``: (params, loss trace).
+
+    For callers that vmap over many problems or want the whole loss trace (to judge
+    convergence from its tail); :func:`minimize` stops on a gradient tolerance instead.
+    """
+    opt = optax.lbfgs()
+    value_and_grad = optax.value_and_grad_from_state(loss_fn)
+
+    def step(carry, _):
+        params, state = carry
+        value, grad = value_and_grad(params, state=state)
+        updates, state = opt.update(grad, state, params, value=value, grad=grad,
+                                    value_fn=loss_fn)
+        return (optax.apply_updates(params, updates), state), value
+
+    (params, _), trace = jax.lax.scan(step, (init, opt.init(init)), None, length=steps)
+    return params, trace
+
+
 def fit_nonlinear(residual_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
                   tol: float = 1e-9) -> FitResult:
     """Nonlinear least squares ``min 0.5 sum r(theta)^2`` by L-BFGS, Gauss-Newton covariance.
