@@ -1,4 +1,8 @@
-"""The paper-000 notebook is committed without outputs and runs from top to bottom."""
+"""The paper-000 notebook is committed without outputs.
+
+CI executes it with nbmake (pyproject addopts); its last cell asserts the paper's table
+layout, the 2-step baseline and the exact inversion, so a wrong number fails CI there.
+"""
 
 from pathlib import Path
 
@@ -12,18 +16,3 @@ def test_notebook_is_stored_without_outputs():
     nb = nbformat.read(NB, as_version=4)
     code = [c for c in nb.cells if c.cell_type == "code"]
     assert code and all(not c.outputs and c.execution_count is None for c in code)
-
-
-@pytest.mark.slow
-def test_notebook_runs_and_reproduces_the_tables():
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    nb = nbformat.read(NB, as_version=4)
-    nbclient.NotebookClient(nb, timeout=240, kernel_name="python3",
-                            resources={"metadata": {"path": str(NB.parent)}}).execute()
-    text = "\n".join(o.get("text", "") for c in nb.cells if c.cell_type == "code"
-                     for o in c.outputs)
-    # the paper's layout, the 2-step baseline at ~1 % and the exact inversion
-    assert "| 20 | -80 | -69.789 | 13 | -79.222 | 0.97 |" in text
-    assert "fogbayes iterations: 2" in text
-    assert "rows: 8400 flagged: 0" in text
