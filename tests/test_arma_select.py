@@ -89,3 +89,17 @@ def test_grid_and_names():
         ["white", "AR(2)", "MA(1)", "ARMA(2,1)"]
     with pytest.raises(ValueError):
         select_order(np.zeros(10), [])
+
+
+def test_pure_autoregressive_candidates_are_fitted():
+    # no candidate has an MA part (Q = 0): the masks still get one row per candidate, and
+    # the log-likelihood equals statsmodels' exact MLE (same tolerance as above)
+    x = _series((1, 0), [7])[0]
+    sel = select_order(x, [(1, 0), (2, 0)])
+    phi, theta, _ = sel.coefficients(0)
+    assert theta.size == 0 and phi.size == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = sm_arima.ARIMA(x, order=(1, 0, 0), trend="n").fit()
+    assert float(sel.fits.loglik[0]) >= r.llf - 1e-6 * abs(r.llf)
+    assert phi[0] == pytest.approx(r.params[0], abs=1e-3)

@@ -17,14 +17,14 @@ from ._app import app
 
 
 @app.callback()
-def _root(quiet: bool = typer.Option(False, "--quiet", "-q", help="Print nothing but results.")):
+def _root(quiet: bool = typer.Option(False, "--quiet", "-q",
+                                   help="No progress bars or status lines on stderr; results only.")):
     """Probabilistic modelling of fiber-optic-gyroscope errors."""
     _common.QUIET["on"] = quiet
 
 
 # Subcommands register themselves on import (order = order in --help).
-from . import allan, arma, compensate, demo, fit, info, loop, report, simulate  # noqa: E402,F401
-from . import stubs  # noqa: E402,F401  (commands not built yet say so and exit 1)
+from . import allan, arma, batch, compensate, demo, fit, info, loop, report, simulate  # noqa: E402,F401
 
 
 def main(argv: list[str] | None = None) -> int:

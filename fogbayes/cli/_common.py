@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import json
-import math
 import sys
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 from rich.console import Console
 
+from .._json import (
+    to_jsonable,  # the one sanitiser (fogbayes/_json.py), re-exported here
+)
 from ..data import Recording, load
 
 #: Messages for people go to stderr so that `--json -` keeps stdout clean.
@@ -21,33 +22,48 @@ QUIET = {"on": False}
 
 REC_ARG = typer.Argument(..., help="Recording file (.csv, .parquet or .npz).", show_default=False)
 
+#: Options that say how to read a recording; the same names and help on every command.
+_INPUT = "Reading the recording"
+COLUMN_OPT = typer.Option("output", "--column", help="Gyro output column.",
+                          rich_help_panel=_INPUT)
+TIME_COLUMN_OPT = typer.Option("time", "--time-column", help="Time column (s).",
+                               rich_help_panel=_INPUT)
+OUTPUT_UNIT_OPT = typer.Option(None, "--output-unit",
+                               help="Output unit: deg/h, deg/s, rad/s, V, mV or Hz "
+                                    "(default: the file's '# unit:' line, else deg/h).",
+                               rich_help_panel=_INPUT, show_default=False)
+SCALE_FACTOR_OPT = typer.Option(None, "--scale-factor",
+                                help="Raw units per deg/s, for V/mV/Hz outputs.",
+                                rich_help_panel=_INPUT, show_default=False)
+TEMPERATURE_OPT = typer.Option(None, "--temperature",
+                               help="Temperature column (repeatable; first = main). Default: "
+                                    "every 'temperature', 'temperature_<k>' column.",
+                               rich_help_panel=_INPUT, show_default=False)
+INPUT_RATE_OPT = typer.Option("input_rate", "--input-rate-column",
+                              help="Reference-rate column (deg/s), used when present.",
+                              rich_help_panel=_INPUT)
+
+
+def _quiet(value: bool) -> bool:
+    """``--quiet`` after a subcommand: the same switch as ``fogbayes --quiet``."""
+    if value:
+        QUIET["on"] = True
+    return value
+
+
+#: ``-q/--quiet``, accepted on every subcommand as well as on the root command.
+QUIET_OPT = typer.Option(False, "--quiet", "-q", callback=_quiet,
+                         help="No progress bars or status lines on stderr; results only.")
+
 
 def load_recording(path: Path, *, column: str = "output", time_column: str = "time",
                    output_unit: str | None = None, scale_factor: float | None = None,
-                   temperature: list[str] | None = None) -> Recording:
+                   temperature: list[str] | None = None,
+                   input_rate: str = "input_rate") -> Recording:
     """Load a Recording with the command line's column/unit overrides."""
     return load(path, time=time_column, output=column, unit=output_unit,
-                scale_factor=scale_factor, temperature=temperature or None)
-
-
-def to_jsonable(obj: Any) -> Any:
-    """NumPy/JAX scalars and arrays to plain Python; NaN/inf to None (valid JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if hasattr(obj, "_asdict"):
-        return to_jsonable(obj._asdict())
-    if hasattr(obj, "tolist") and not isinstance(obj, (str, bytes)):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        f = float(obj)
-        return f if math.isfinite(f) else None
-    return obj
+                scale_factor=scale_factor, temperature=temperature or None,
+                input_rate=input_rate)
 
 
 def write_json(obj: Any, out: Path | str) -> None:
@@ -70,7 +86,8 @@ def say(msg: str) -> None:
 @contextmanager
 def progress(description: str, total: int | None = None):
     """A rich progress bar on stderr (silent with --quiet); yields an ``advance`` callable."""
-    from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+    from rich.progress import (BarColumn, Progress, SpinnerColumn, TextColumn,
+                               TimeElapsedColumn)
 
     if QUIET["on"]:
         yield lambda n=1: None

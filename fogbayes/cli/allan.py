@@ -12,7 +12,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import REC_ARG, load_recording, progress, say, write_json
+from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
+                      TIME_COLUMN_OPT, load_recording, progress, say, write_json)
 
 _TAUS = ("octave", "decade", "dense", "all")
 
@@ -36,21 +37,28 @@ def summary_lines(doc: dict) -> list[str]:
 @app.command()
 def allan(
     rec: Path = REC_ARG,
-    json_out: Path = typer.Option(..., "--json", help="Result document to write ('-' = stdout)."),
-    column: str = typer.Option("output", help="Output (rate) column."),
-    time_column: str = typer.Option("time", help="Time column (s)."),
-    output_unit: str = typer.Option(None, help="Unit of the output column (default deg/h)."),
-    scale_factor: float = typer.Option(None, help="Raw units per deg/s for V/mV/Hz outputs."),
+    json_out: str = typer.Option(..., "--json", help="Result document to write ('-' = stdout)."),
     taus: str = typer.Option("octave", help="Tau grid: octave | decade | dense | all."),
     per_decade: int = typer.Option(20, help="Points per decade of the dense grid."),
     bayes: bool = typer.Option(False, "--bayes",
                                help="NumPyro posterior with term selection (slower)."),
     seed: int = typer.Option(0, help="Seed of the posterior sampler."),
     plot: Path = typer.Option(None, "--plot", help="Also write the log-log ADEV figure (PNG/PDF)."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Allan deviation with 90 % intervals and the five-term noise fit (Q, N, B, K, R).
 
-    Example: fogbayes allan gyro.csv --output-unit deg/s --taus dense --bayes --json av.json
+    The JSON document holds tau, the overlapping ADEV with its 90 % interval, and each noise term with its interval, in canonical units (N deg/sqrt(h), B deg/h, K deg/h^1.5, R deg/h^2, Q arcsec and urad) whatever the input unit.
+
+    Examples:
+      fogbayes allan static.csv --json adev.json --plot adev.png
+      fogbayes allan gyro.csv --output-unit deg/s --taus dense --bayes \\
+          --json av.json
+      fogbayes -q allan static.csv --json - > adev.json
     """
     from ..errors import FogbayesError
     from ..workflow.allan import fit_recording

@@ -7,13 +7,14 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import REC_ARG, load_recording, progress, say, write_json
+from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
+                      TIME_COLUMN_OPT, load_recording, progress, say, write_json)
 
 
 @app.command()
 def arma(
     rec_path: Path = REC_ARG,
-    json_out: str = typer.Option(..., "--json", help="Write the result as JSON ('-' for stdout)."),
+    json_out: str = typer.Option(..., "--json", help="Result document to write ('-' = stdout)."),
     decimate: int = typer.Option(1, help="Average blocks of K samples first (paper: 10 Hz)."),
     detrend: int = typer.Option(1, help="Order of the polynomial trend removed first "
                                         "(0 = mean only)."),
@@ -28,23 +29,25 @@ def arma(
     seed: int = typer.Option(0, help="Random seed of the Bayesian sampler."),
     plot: Path = typer.Option(None, "--plot", help="Write a PNG: ACF/PACF, one-step "
                               "prediction, filtered signal and removed noise."),
-    column: str = typer.Option("output", help="Name of the gyro output column."),
-    time_column: str = typer.Option("time", help="Name of the time column (s)."),
-    output_unit: str = typer.Option(None, help="Output unit (deg/h, deg/s, ...); parameters "
-                                    "are reported in it."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Identify, fit and check an ARMA model of the gyro drift; filter the record.
 
-    JSON: selected order, every candidate's AIC/BIC/log-likelihood, the parameters in the
-    paper's sign convention (x_t = sum phi_i x_{t-i} + a_t - sum theta_j a_{t-j}) with
-    standard errors, and whiteness of the residuals (rho_a2, rho_ax3, Ljung-Box p).
+    The JSON document holds the selected order, every candidate's AIC/BIC/log-likelihood, the parameters in the paper's sign convention (x_t = sum phi_i x_{t-i} + a_t - sum theta_j a_{t-j}) with standard errors, in the output unit of the recording, and the whiteness of the residuals (rho_a2, rho_ax3, Ljung-Box p).
 
-    Example: fogbayes arma static.csv --output-unit deg/s --decimate 10 --json arma.json
+    Examples:
+      fogbayes arma static.csv --decimate 10 --json arma.json --plot arma.png
+      fogbayes arma static.csv --candidates grid --criterion aic --json arma.json
+      fogbayes -q arma static.csv --output-unit deg/s --json - > arma.json
     """
     from ..workflow.arma import analyse_recording
 
     rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=output_unit)
+                         output_unit=output_unit, scale_factor=scale_factor)
     with progress("fitting ARMA candidates"):
         result = analyse_recording(rec, decimate=decimate, detrend_order=detrend,
                                    candidates=candidates, criterion=criterion, lags=lags,

@@ -13,7 +13,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import REC_ARG, load_recording, say
+from ._common import (COLUMN_OPT, INPUT_RATE_OPT, QUIET_OPT, REC_ARG, TEMPERATURE_OPT,
+                      TIME_COLUMN_OPT, load_recording, progress, say, write_json)
 
 
 def read_fit(path: Path) -> dict:
@@ -33,20 +34,51 @@ def read_fit(path: Path) -> dict:
     return doc
 
 
+def summary(rec, fit_doc: dict, cols: dict, *, rec_path, params, out) -> dict:
+    """The ``--json`` document: what was compensated and, for bias models, the bias
+    stability before/after (paper 004 eq. 13, :func:`fogbayes.metrics.stability_report`)."""
+    from ..metrics import stability_report
+    from ..units import convert_rate
+
+    doc = {"file": str(rec_path), "params": str(params), "out": str(out),
+           "model": fit_doc.get("model"), "rows": int(len(cols["time"])),
+           "outliers": int(cols["outlier"].sum()) if "outlier" in cols else 0,
+           "columns": list(cols)}
+    if "output" in cols:  # bias models: output in the input unit; metrics in deg/h
+        after = convert_rate(cols["output"], rec.unit, "deg/h", scale_factor=rec.scale_factor)
+        doc["unit"] = rec.unit
+        doc["metrics"] = stability_report(rec.rate("deg/h"), after, rec.time)
+    return doc
+
+
 @app.command()
 def compensate(
     rec: Path = REC_ARG,
-    params: Path = typer.Option(..., "--params", "-p", help="Fit document from 'fogbayes fit'."),
+    params: Path = typer.Option(..., "--params", "--fit", "-p",
+                                help="Fit document from 'fogbayes fit --json'."),
     out: Path = typer.Option(..., "--out", "-o", help="Compensated CSV to write."),
-    column: str = typer.Option("output", help="Output column."),
-    time_column: str = typer.Option("time", help="Time column (s)."),
-    output_unit: str = typer.Option(None, help="Output unit (default: the one the fit used)."),
-    scale_factor: float = typer.Option(None, help="Raw units per deg/s (default: the fit's)."),
-    temperature: list[str] = typer.Option(None, help="Temperature column(s), first = main."),
+    json_out: str = typer.Option(None, "--json", help="Also write a summary document (rows, "
+                                 "outliers, bias stability before/after) ('-' = stdout)."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = typer.Option(None, "--output-unit", show_default=False,
+                                    rich_help_panel="Reading the recording",
+                                    help="Output unit (default: the one the fit used)."),
+    scale_factor: float = typer.Option(None, "--scale-factor", show_default=False,
+                                       rich_help_panel="Reading the recording",
+                                       help="Raw units per deg/s (default: the fit's)."),
+    temperature: list[str] = TEMPERATURE_OPT,
+    input_rate: str = INPUT_RATE_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Compensate a recording with a fitted model; every input row is written.
 
-    Example: fogbayes compensate run.csv --params fit.json --out compensated.csv
+    The CSV has one row per input row: time, the compensated output in the input unit (for the composite model: the estimated input rate in deg/s) and a boolean outlier column (3-sigma flags; nothing is dropped).
+
+    Examples:
+      fogbayes compensate run.csv --params fit.json --out compensated.csv
+      fogbayes compensate run.csv -p fit.json -o comp.csv --json summary.json
+      fogbayes -q compensate run.csv -p fit.json -o comp.csv --json -
     """
     from ..data import write_csv_mixed
     from ..errors import FogbayesError
@@ -63,8 +95,12 @@ def compensate(
                                output_unit=output_unit or given.get("unit"),
                                scale_factor=scale_factor if scale_factor is not None
                                else given.get("scale_factor"),
-                               temperature=temperature)
-    cols = wf.compensate_recording(recording, fit_doc)
-    write_csv_mixed(out, cols)
+                               temperature=temperature, input_rate=input_rate)
+    with progress(f"compensating {recording.n} samples ({fit_doc['model']})"):
+        cols = wf.compensate_recording(recording, fit_doc)
+        write_csv_mixed(out, cols)
     n_out = int(cols["outlier"].sum()) if "outlier" in cols else 0
     say(f"wrote {out}: {len(cols['time'])} rows, {n_out} flagged as outliers")
+    if json_out:
+        write_json(summary(recording, fit_doc, cols, rec_path=rec, params=params, out=out),
+                   json_out)

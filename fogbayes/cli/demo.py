@@ -7,19 +7,39 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import progress, say
+from ._common import QUIET_OPT, progress, say, write_json
+
+
+def summary_document(result) -> dict:
+    """The ``--json`` document: files written and, per model, convergence, orders and the
+    bias stability before/after on each window (the numbers the printed summary shows)."""
+    models = {}
+    for model, doc in result.fits.items():
+        models[model] = {"converged": doc.get("converged"),
+                         "spec": doc["params"]["spec"],
+                         "stability": doc["metrics"]["full"]["stability"]}
+    return {"report": str(result.report), "recording": str(result.recording), "models": models}
 
 
 @app.command()
 def demo(
-    out: Path = typer.Option(Path("fogbayes_demo"), "--out", "-o", help="Folder for the report and data."),
+    out: Path = typer.Option(Path("fogbayes_demo"), "--out", "-o",
+                             help="Folder for the report and the simulated recording."),
     seed: int = typer.Option(0, help="Random seed of the simulated test."),
     duration: float = typer.Option(None, help="Test length in s (default: the 6.3 h thermal test)."),
     fs: float = typer.Option(None, help="Sample rate in Hz (default 10)."),
+    json_out: str = typer.Option(None, "--json", help="Also write a summary document (files, "
+                                 "bias stability before/after per model) ('-' = stdout)."),
+    quiet: bool = QUIET_OPT,
 ):
     """Simulate a thermal-chamber test, fit, compensate and write a report.
 
-    Example: fogbayes demo --out demo_out
+    No arguments and no files are needed: the test is simulated (quadratic bias in temperature plus a Shupe temperature-rate term, FOG-like noise), fitted with bias-t and thermal, compensated, and written up in OUT/report.html next to the recording OUT/demo_recording.csv, which the other commands can read.
+
+    Examples:
+      fogbayes demo
+      fogbayes demo --out demo_out --seed 3
+      fogbayes -q demo --duration 7200 --fs 1 --json - > demo.json
     """
     from ..demo import run_demo
 
@@ -29,4 +49,9 @@ def demo(
             advance()
 
         result = run_demo(out, seed=seed, duration=duration, fs=fs, step=step)
-    typer.echo(result.summary)
+    if json_out:
+        write_json(summary_document(result), json_out)
+    if json_out == "-":  # stdout holds the JSON document only
+        say(result.summary)
+    else:
+        typer.echo(result.summary)

@@ -13,7 +13,9 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import REC_ARG, load_recording, say, write_json
+from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
+                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
+                      progress, say, write_json)
 
 
 def parse_option_pairs(items: list[str] | None) -> dict:
@@ -47,8 +49,8 @@ def fit(
     rec: Path = REC_ARG,
     model: str = typer.Option(..., "--model", "-m",
                               help="bias-t | thermal | composite | allan | arma."),
-    json_out: Path = typer.Option(..., "--json", help="Fit document to write ('-' = stdout)."),
-    orders: str = typer.Option(None, "--order", "--orders",
+    json_out: str = typer.Option(..., "--json", help="Fit document to write ('-' = stdout)."),
+    orders: str = typer.Option(None, "--orders", "--order",
                                help="Order(s): bias-t '3' or '1-4'; thermal '2,2' or '1-3,1-2'; "
                                     "'auto' selects by the RMS criterion."),
     bayes: bool = typer.Option(False, "--bayes", help="Also compute the posterior (NUTS)."),
@@ -57,16 +59,25 @@ def fit(
     noise: str = typer.Option(None, help="Posterior noise model: ar | white | arma."),
     option: list[str] = typer.Option(None, "--option", "-O",
                                      help="Model option KEY=VALUE (repeatable), e.g. rate_window_s=30."),
-    column: str = typer.Option("output", help="Output column."),
-    time_column: str = typer.Option("time", help="Time column (s)."),
-    output_unit: str = typer.Option(None, help="Unit of the output column (default deg/h)."),
-    scale_factor: float = typer.Option(None, help="Raw units per deg/s for V/mV/Hz outputs."),
-    temperature: list[str] = typer.Option(None, help="Temperature column(s), first = main."),
     strict: bool = typer.Option(False, help="Exit with code 1 when the fit did not converge."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    temperature: list[str] = TEMPERATURE_OPT,
+    input_rate: str = INPUT_RATE_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Fit a model to a recording and write the fit document as JSON.
 
-    Example: fogbayes fit run.csv --model thermal --orders 2,2 --bayes --json fit.json
+    The document holds the coefficients in the scaled basis (what 'fogbayes compensate' uses) and in the papers' raw form with standard errors, the processing, outlier counts, bias stability before/after (thermal models) and, with --bayes, posterior intervals and convergence.
+
+    Examples:
+      fogbayes fit run.csv --model thermal --json fit.json
+      fogbayes fit run.csv -m bias-t --orders auto --json fit.json
+      fogbayes fit run.csv -m thermal --orders 2,2 --bayes --json fit.json
+      fogbayes fit chamber.csv -m thermal --processing paper --json fit.json
+      fogbayes -q fit table.csv -m composite --json - > fit.json
     """
     from ..workflow import workflow_for
 
@@ -77,9 +88,10 @@ def fit(
             options[key] = value
     recording = load_recording(rec, column=column, time_column=time_column,
                                output_unit=output_unit, scale_factor=scale_factor,
-                               temperature=temperature)
-    doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,
-                           **options)
+                               temperature=temperature, input_rate=input_rate)
+    with progress(f"fitting {model} to {recording.n} samples" + (" (posterior)" if bayes else "")):
+        doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,
+                               **options)
     write_json(doc, json_out)
     say(summary_line(doc))
     if strict and not doc.get("converged", False):

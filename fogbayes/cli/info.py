@@ -8,39 +8,61 @@ import numpy as np
 import typer
 
 from ._app import app
-from ._common import REC_ARG, load_recording, write_json
+from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
+                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
+                      write_json)
+
+
+def summary_document(rec, rec_path) -> dict:
+    """The ``--json`` document: size, sampling, gaps, unit, output and channel ranges."""
+    s = rec.sampling()
+    return {
+        "file": str(rec_path), "sensor_id": rec.meta.sensor_id, "n": rec.n,
+        "duration_s": s.duration, "sample_rate_hz": s.sample_rate, "irregular": s.irregular,
+        "gaps": [{"index": g.index, "start_s": g.start, "duration_s": g.duration} for g in s.gaps],
+        "unit": rec.unit, "scale_factor": rec.scale_factor,
+        "output_mean": float(np.mean(rec.output)), "output_std": float(np.std(rec.output)),
+        "temperatures": {nm: {"min": float(rec.temperatures[:, j].min()),
+                              "max": float(rec.temperatures[:, j].max())}
+                         for j, nm in enumerate(rec.temperature_names)},
+        "input_rate": None if rec.input_rate is None else
+        {"min": float(rec.input_rate.min()), "max": float(rec.input_rate.max())},
+    }
 
 
 @app.command()
 def info(
     rec_path: Path = REC_ARG,
-    column: str = typer.Option("output", help="Name of the gyro output column."),
-    time_column: str = typer.Option("time", help="Name of the time column (s)."),
-    output_unit: str = typer.Option(None, help="Output unit (deg/h, deg/s, rad/s, V, mV, Hz); default from the file, else deg/h."),
-    json_out: str = typer.Option(None, "--json", help="Also write the summary as JSON ('-' for stdout)."),
+    json_out: str = typer.Option(None, "--json", help="Also write the summary as a JSON "
+                                 "document ('-' = stdout, instead of the text summary)."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    temperature: list[str] = TEMPERATURE_OPT,
+    input_rate: str = INPUT_RATE_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Summarise a recording: samples, rate, gaps, temperature and output ranges.
 
-    Example: fogbayes info chamber_run.csv --output-unit deg/s
+    Reading a file with 'info' is the quickest check of the data contract: a bad file gives one line naming the file, column and row, and exit code 2.
+
+    Examples:
+      fogbayes info chamber_run.csv
+      fogbayes info gyro.csv --output-unit deg/s --time-column t_s
+      fogbayes info run.csv --json - > info.json
     """
-    rec = load_recording(rec_path, column=column, time_column=time_column, output_unit=output_unit)
+    rec = load_recording(rec_path, column=column, time_column=time_column,
+                         output_unit=output_unit, scale_factor=scale_factor,
+                         temperature=temperature, input_rate=input_rate)
     s = rec.sampling()
-    summary = {
-        "file": str(rec_path), "sensor_id": rec.meta.sensor_id, "n": rec.n,
-        "duration_s": s.duration, "sample_rate_hz": s.sample_rate, "irregular": s.irregular,
-        "gaps": [{"index": g.index, "start_s": g.start, "duration_s": g.duration} for g in s.gaps],
-        "unit": rec.unit, "output_mean": float(np.mean(rec.output)), "output_std": float(np.std(rec.output)),
-        "temperatures": {nm: {"min": float(rec.temperatures[:, j].min()), "max": float(rec.temperatures[:, j].max())}
-                         for j, nm in enumerate(rec.temperature_names)},
-        "input_rate": None if rec.input_rate is None else
-        {"min": float(rec.input_rate.min()), "max": float(rec.input_rate.max())},
-    }
     if json_out:
-        write_json(summary, json_out)
+        write_json(summary_document(rec, rec_path), json_out)
     if json_out != "-":
         typer.echo(repr(rec))
         if s.gaps:
+            longest = max(s.gaps, key=lambda g: g.duration)
             typer.echo(f"{len(s.gaps)} gap(s) kept as they are (never interpolated); longest "
-                       f"{max(g.duration for g in s.gaps):.3g} s at t = {max(s.gaps, key=lambda g: g.duration).start:.6g} s")
+                       f"{longest.duration:.3g} s at t = {longest.start:.6g} s")
         if s.irregular:
             typer.echo("sampling is irregular (time steps vary by more than 1 % outside gaps)")

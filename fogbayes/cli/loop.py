@@ -15,7 +15,9 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import REC_ARG, load_recording, progress, say, write_json
+from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
+                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
+                      progress, say, write_json)
 
 
 @app.command(name="loop")
@@ -28,19 +30,29 @@ def loop(
                                      help="Compensated CSV to write (every input row)."),
     max_steps: int = typer.Option(5, "--max-steps", min=0, help="Add at most this many effects."),
     report: Path = typer.Option(None, "--report", help="Also write an HTML report of the loop."),
-    orders: str = typer.Option(None, "--orders", help="Base orders: bias-t/thermal 'n' (default 2); "
-                               "composite 's1,s2,u0[,u1]' (default 0,0,2)."),
+    orders: str = typer.Option(None, "--orders", "--order",
+                               help="Base orders: bias-t/thermal 'n' (default 2); "
+                                    "composite 's1,s2,u0[,u1]' (default 0,0,2)."),
     alpha: float = typer.Option(0.01, help="Family-wise false-effect level of each step."),
     seed: int = typer.Option(0, help="Seed of the bootstrap calibration and ELPD draws."),
-    column: str = typer.Option("output", help="Output column."),
-    time_column: str = typer.Option("time", help="Time column (s)."),
-    output_unit: str = typer.Option(None, help="Output unit (deg/h, deg/s, rad/s, V, mV, Hz)."),
-    scale_factor: float = typer.Option(None, help="Raw units per deg/s (for V, mV, Hz outputs)."),
-    temperature: list[str] = typer.Option(None, help="Temperature column(s), first = main."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    temperature: list[str] = TEMPERATURE_OPT,
+    input_rate: str = INPUT_RATE_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Run fit -> diagnose -> add effect -> refit until nothing more is supported.
 
-    Example: fogbayes loop chamber.csv --model bias-t --json loop.json --compensated comp.csv
+    Each step adds the candidate effect (temperature rate, gradient, hysteresis, time drift, step, periodic, ...) that the evidence supports, calibrated so that clean data adds nothing; structure no candidate explains is listed as unexplained.
+
+    Examples:
+      fogbayes loop chamber.csv --model bias-t --json loop.json \\
+          --compensated comp.csv --report loop.html
+      fogbayes loop table.csv -m composite --max-steps 3 \\
+          --json loop.json --compensated rates.csv
+      fogbayes -q loop chamber.csv -m bias-t --json - --compensated comp.csv
     """
     from ..data.io import write_csv_mixed
     from ..errors import FogbayesError
@@ -51,7 +63,7 @@ def loop(
                             fix="use e.g. --alpha 0.01")
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=output_unit, scale_factor=scale_factor,
-                         temperature=temperature)
+                         temperature=temperature, input_rate=input_rate)
     with progress(f"closed loop on {rec_path.name} ({model})"):
         res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed)
     write_json(res.to_json(), json_out)

@@ -9,7 +9,9 @@ import typer
 
 from ..errors import FileFormatError
 from ._app import app
-from ._common import REC_ARG, load_recording, progress, say
+from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
+                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
+                      progress, say)
 
 
 def _read_json(path: Path, what: str) -> dict:
@@ -24,24 +26,37 @@ def _read_json(path: Path, what: str) -> dict:
 def report(
     rec_path: Path = REC_ARG,
     out: Path = typer.Option(Path("report.html"), "--out", "-o", help="HTML file to write."),
-    model: str = typer.Option(None, help="Fit this model first: bias-t, thermal, composite, allan."),
-    fit: Path = typer.Option(None, help="Use this fit document (from 'fogbayes fit --json')."),
+    model: str = typer.Option(None, "--model", "-m",
+                              help="Fit this model first: bias-t, thermal, composite, allan."),
+    fit: Path = typer.Option(None, "--fit", "--params", "-p",
+                             help="Use this fit document (from 'fogbayes fit --json')."),
     loop_json: Path = typer.Option(None, "--loop", help="Re-run and tell the closed loop "
                                    "recorded in this JSON (from 'fogbayes loop --json')."),
     bayes: bool = typer.Option(False, help="Posterior intervals (NumPyro) with --model."),
     pdf: Path = typer.Option(None, help="Also print the report to this PDF (headless Chromium)."),
-    column: str = typer.Option("output", help="Name of the gyro output column."),
-    output_unit: str = typer.Option(None, help="Output unit (default from the file, else deg/h)."),
-    scale_factor: float = typer.Option(None, help="Raw units per deg/s for V/mV/Hz outputs."),
     seed: int = typer.Option(0, help="Random seed of the samplers."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    temperature: list[str] = TEMPERATURE_OPT,
+    input_rate: str = INPUT_RATE_OPT,
+    quiet: bool = QUIET_OPT,
 ):
     """Write a calibration report: recording, fitted model, residuals, compensation, noise.
 
-    Example: fogbayes report chamber.csv --model thermal --out chamber_report.html
+    One self-contained HTML file (figures embedded): the recording, the fitted model with its coefficients and intervals, residuals against time and each covariate, bias stability before/after compensation, and the Allan deviation. Without --model, --fit or --loop it describes the recording and its noise only.
+
+    Examples:
+      fogbayes report chamber.csv --model thermal --out chamber_report.html
+      fogbayes report chamber.csv --fit fit.json --pdf report.pdf
+      fogbayes report chamber.csv --loop loop.json --out loop_report.html
     """
     from ..workflow.report import build_report, print_pdf
 
-    rec = load_recording(rec_path, column=column, output_unit=output_unit, scale_factor=scale_factor)
+    rec = load_recording(rec_path, column=column, time_column=time_column,
+                         output_unit=output_unit, scale_factor=scale_factor,
+                         temperature=temperature, input_rate=input_rate)
     fit_doc = _read_json(fit, "fit") if fit else None
     loop_res = None
     with progress("building the report"):

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import say, write_json
+from ._common import QUIET_OPT, progress, say, write_json
 
 
 @app.command()
@@ -21,12 +21,22 @@ def simulate(
     effect: list[str] = typer.Option(
         None, "--effect",
         help="Add an effect: NAME or NAME='{\"param\": value}' (repeatable); see --list."),
-    truth: Path = typer.Option(None, help="Also write the true parameters as JSON."),
+    truth: str = typer.Option(None, "--truth", "--json",
+                              help="Also write the true parameters as a JSON document "
+                                   "('-' = stdout)."),
     list_: bool = typer.Option(False, "--list", help="List scenarios and effects, then exit."),
+    quiet: bool = QUIET_OPT,
 ):
     """Simulate a FOG test with known truth and write it as a recording file.
 
-    Example: fogbayes simulate thermal --seed 3 --effect step --out run.csv --truth truth.json
+    Scenarios: thermal (6.3 h chamber test), paper004 (paper 004's verification profile), paper000 (paper 000's rate table, output in V), ratetable, static. Effects (temperature_rate, step, periodic, ...) are added by name with --effect; --list shows them all. The same seed gives the same data.
+
+    Examples:
+      fogbayes simulate thermal --seed 3 --out run.csv --truth truth.json
+      fogbayes simulate thermal --effect step --effect periodic --out run.csv
+      fogbayes simulate thermal --effect step='{"size": 0.5}' --out step.csv
+      fogbayes simulate paper004 --fs 1 --out p004.parquet
+      fogbayes simulate --list
     """
     from ..data import save
     from ..errors import FogbayesError
@@ -52,8 +62,9 @@ def simulate(
         except json.JSONDecodeError as exc:
             raise FogbayesError(f"parameters of effect '{name}' are not valid JSON ({exc.msg})",
                                 column="--effect", fix="write e.g. --effect step='{\"size\": 0.5}'") from None
-    sim = run(scenario, seed=seed, fs=fs, duration=duration, effects=effects or None)
-    save(sim.recording, out)
+    with progress(f"simulating {scenario}"):
+        sim = run(scenario, seed=seed, fs=fs, duration=duration, effects=effects or None)
+        save(sim.recording, out)
     say(f"wrote {out}: {sim.recording!r}")
     if truth is not None:
         write_json(sim.truth.params, truth)

@@ -76,8 +76,9 @@ class OrderSelection(NamedTuple):
 
 
 def _masks(orders, P: int, Q: int) -> tuple[Array, Array]:
-    mp = np.array([[1.0 if i < p else 0.0 for i in range(P)] for p, _ in orders]).reshape(-1, P)
-    mq = np.array([[1.0 if j < q else 0.0 for j in range(Q)] for _, q in orders]).reshape(-1, Q)
+    # len(orders) rows even when P or Q is 0 (reshape(-1, 0) cannot infer the row count)
+    mp = np.array([[1.0 if i < p else 0.0 for i in range(P)] for p, _ in orders]).reshape(len(orders), P)
+    mq = np.array([[1.0 if j < q else 0.0 for j in range(Q)] for _, q in orders]).reshape(len(orders), Q)
     return jnp.asarray(mp), jnp.asarray(mq)
 
 

@@ -1,0 +1,145 @@
+"""Where the recordings of a fleet run: in this process, or on a Dask cluster.
+
+``run_tasks(fn, items, engine=, address=, workers=, on_done=)`` calls ``fn(item)`` for
+every item and returns the results **in input order**, whichever finished first:
+
+* ``"local"`` -- one after another in this process (no extra processes; the reference);
+* ``"dask"``  -- ``address=None``: a :class:`distributed.LocalCluster` of ``workers``
+  worker processes, one thread each (a fit is CPU-bound Python + XLA: threads would fight
+  over the GIL), started here and closed when the run ends; ``address="tcp://host:8786"``:
+  the same code submitted to an existing scheduler (``dask scheduler`` + ``dask worker``
+  on the machines of a cluster), which is left running.
+
+Why Dask and not Ray: both run Python functions on remote processes and return futures.
+Dask's wheels are pure Python (Ray's wheel is about ten times larger, with a C++ core and
+its own object store daemon); ``LocalCluster`` starts in-process in a few seconds, with no
+daemon to install or leave behind; the same ``Client`` code is pointed at a remote
+scheduler by its address; and each future carries its own exception, so a failure stays
+with its recording. Nothing of fogbayes depends on Dask outside this module.
+
+Every worker imports :mod:`fogbayes` before it runs anything (a worker plugin), which turns
+on JAX float64 there too: the numbers a worker computes are those this process computes
+(the batch tests check equality with the in-process engine). For a remote cluster the
+workers need fogbayes installed and must read the recordings and write OUT at the same
+paths (a shared file system), because jobs pass paths, not data.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+from .files import FleetError
+
+ENGINES = ("local", "dask")
+
+
+def check_engine(engine: str, address: str | None, workers: int) -> None:
+    if engine not in ENGINES:
+        raise FleetError(f"unknown engine '{engine}'", column="--engine",
+                         fix=f"use one of {', '.join(ENGINES)}")
+    if address and engine != "dask":
+        raise FleetError("--address names a Dask scheduler", column="--address",
+                         fix="add --engine dask, or drop --address")
+    if int(workers) < 1:
+        raise FleetError(f"--workers {workers} is below 1", column="--workers",
+                         fix="use e.g. --workers 2")
+
+
+def _worker_plugin():
+    from distributed import WorkerPlugin
+
+    class ImportFogbayes(WorkerPlugin):
+        """Import fogbayes (float64 on) in the worker before any task runs."""
+
+        name = "fogbayes-float64"
+
+        def setup(self, worker):
+            import jax
+
+            import fogbayes  # noqa: F401
+
+            if not jax.config.jax_enable_x64:
+                raise RuntimeError("fogbayes did not turn on JAX float64 in this worker")
+
+    return ImportFogbayes()
+
+
+@contextmanager
+def dask_client(address: str | None = None, workers: int = 2) -> Iterator[Any]:
+    """A Dask client: on a local cluster we start (and close), or on ``address``."""
+    from distributed import Client, LocalCluster
+
+    cluster = None
+    try:
+        if address:
+            client = Client(address, timeout="20s")
+        else:
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+            client = Client(cluster)
+    except (OSError, TimeoutError) as exc:  # no scheduler there, or it did not answer
+        raise FleetError(f"cannot reach a Dask scheduler at {address!r} ({exc})",
+                         column="--address",
+                         fix="start one ('dask scheduler' and 'dask worker ADDRESS') or drop "
+                             "--address for a local cluster") from None
+    try:
+        client.register_plugin(_worker_plugin())
+        yield client
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def n_workers(client) -> int:
+    return len(client.scheduler_info().get("workers", {}))
+
+
+def run_tasks(fn: Callable[[Any], Any], items: Sequence[Any], *, engine: str = "local",
+              address: str | None = None, workers: int = 2,
+              on_done: Callable[[Any], None] | None = None,
+              on_error: Callable[[Any, BaseException], Any] | None = None) -> dict:
+    """``fn`` over ``items`` on ``engine``; returns ``{"results": [...], "workers": n}``.
+
+    ``on_done(result)`` is called as each item finishes (progress bars); ``on_error(item,
+    exc)`` turns an exception that escaped ``fn`` (or a lost worker) into that item's
+    result -- without it, the exception propagates.
+    """
+    check_engine(engine, address, workers)
+    items = list(items)
+    on_done = on_done or (lambda r: None)
+
+    def failed(item, exc):
+        if on_error is None:
+            raise exc
+        return on_error(item, exc)
+
+    if engine == "local":
+        results = []
+        for item in items:
+            try:
+                r = fn(item)
+            except Exception as exc:  # noqa: BLE001  (handed to on_error)
+                r = failed(item, exc)
+            results.append(r)
+            on_done(r)
+        return {"results": results, "workers": 1}
+
+    from distributed import as_completed
+
+    with dask_client(address, workers) as client:
+        # pure=False: a rerun of the same file is new work, never a cached key
+        futures = client.map(fn, items, pure=False)
+        index = {f.key: i for i, f in enumerate(futures)}
+        results: list[Any] = [None] * len(items)
+        for fut in as_completed(futures):
+            i = index[fut.key]
+            try:
+                results[i] = fut.result()
+            except Exception as exc:  # noqa: BLE001  (a task error or a lost worker)
+                results[i] = failed(items[i], exc)
+            on_done(results[i])
+        return {"results": results, "workers": n_workers(client)}

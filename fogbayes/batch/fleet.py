@@ -1,0 +1,117 @@
+"""A fleet run: every recording of a folder through one task, then ``OUT/summary.json``.
+
+``run_batch(DIR, model=, out=, task=, engine=, ...)`` finds the recordings
+(:func:`.files.find_recordings`), runs :func:`.jobs.run_one` on each through the engine
+(:func:`.engine.run_tasks`: in-process, or a Dask cluster), or -- ``vectorize=True``, for
+``bias-t``/``thermal`` recordings of one length and sampling -- fits them all with one
+batched solve (:func:`.vectorized.fit_vectorized`), and writes the summary::
+
+    {"fogbayes_version", "task", "model", "engine", "address", "workers", "vectorized",
+     "folder", "pattern", "options", "n_files", "n_ok", "n_error", "seconds",
+     "rows": [{"file", "status", "outputs" | "error", <key numbers>, "seconds"}, ...]}
+
+one row per recording, in file-name order whatever the engine. A recording that fails is an
+``error`` row; the run goes on. Input that makes the whole run impossible (no folder, no
+recordings, unknown task/model/engine, an unreachable scheduler) raises
+:class:`.files.FleetError` before any work.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+
+from .engine import check_engine, run_tasks
+from .files import FleetError, check_task, find_recordings
+from .jobs import (
+    JobOptions,
+    as_options,
+    error_row,
+    fit_outputs,
+    load_one,
+    run_one,
+    write_json,
+)
+
+
+def run_batch(folder: str | Path, *, model: str, out: str | Path, task: str = "fit",
+              engine: str = "local", address: str | None = None, workers: int = 2,
+              pattern: str = "*.csv", vectorize: bool = False,
+              options: JobOptions | dict | None = None, solver: str = "gram",
+              on_done: Callable[[dict], None] | None = None) -> dict:
+    """Run ``task`` on every recording of ``folder``; write and return the summary.
+
+    ``on_done(row)`` is called as each recording finishes (e.g. to advance a progress bar).
+    """
+    import fogbayes
+
+    check_task(task, model)
+    check_engine(engine, address, workers)
+    if vectorize and (engine != "local" or task not in ("fit", "compensate")):
+        raise FleetError("--vectorize fits in this process (task fit or compensate)",
+                         column="--vectorize",
+                         fix="drop --engine dask/--address, use --task fit, or drop --vectorize")
+    files = find_recordings(folder, pattern)
+    opts = as_options(options)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    if vectorize:
+        rows, n_workers = _vectorized(files, model, task, out, opts, solver, on_done), 1
+    else:
+        job = partial(run_one, model=model, task=task, out_dir=str(out), options=opts)
+        done = run_tasks(job, [str(f) for f in files], engine=engine, address=address,
+                         workers=workers, on_done=on_done, on_error=error_row)
+        rows, n_workers = done["results"], done["workers"]
+    n_ok = sum(r["status"] == "ok" for r in rows)
+    summary = {"fogbayes_version": fogbayes.__version__, "task": task, "model": model,
+               "engine": engine, "address": address, "workers": n_workers,
+               "vectorized": bool(vectorize), "folder": str(folder), "pattern": pattern,
+               "options": opts._asdict(), "n_files": len(rows), "n_ok": n_ok,
+               "n_error": len(rows) - n_ok, "seconds": time.perf_counter() - t0, "rows": rows}
+    write_json(summary, out / "summary.json")
+    return summary
+
+
+def _vectorized(files, model, task, out, opts: JobOptions, solver, on_done) -> list[dict]:
+    """Load every file (a bad one is an error row), fit the rest in one batch, write each."""
+    from .vectorized import fit_vectorized
+
+    rows: dict[str, dict] = {}
+    recs = {}
+    for f in files:
+        t = time.perf_counter()
+        try:
+            recs[str(f)] = load_one(f, opts)
+        except Exception as exc:  # noqa: BLE001  one bad file never stops the fleet
+            rows[str(f)] = {**error_row(f, exc), "seconds": time.perf_counter() - t}
+            if on_done:
+                on_done(rows[str(f)])
+    names = list(recs)
+
+    def failed(i: int, exc: Exception) -> None:  # this recording cannot be fitted: its row
+        rows[names[i]] = {**error_row(names[i], exc), "seconds": 0.0}
+        if on_done:
+            on_done(rows[names[i]])
+
+    t = time.perf_counter()
+    docs = fit_vectorized(list(recs.values()), model=model, orders=opts.orders, bayes=opts.bayes,
+                          seed=opts.seed, solver=solver, on_error=failed,
+                          **(opts.fit_options or {}))
+    share = (time.perf_counter() - t) / max(len(docs), 1)  # the batched stage, split evenly
+    for (name, rec), doc in zip(recs.items(), docs):
+        if doc is None:
+            continue
+        t = time.perf_counter()
+        try:
+            row = {"file": name, "status": "ok",
+                   **fit_outputs(rec, Path(name), doc, task=task, out_dir=out)}
+        except Exception as exc:  # noqa: BLE001
+            row = error_row(name, exc)
+        row["seconds"] = share + time.perf_counter() - t
+        rows[name] = row
+        if on_done:
+            on_done(row)
+    return [rows[str(f)] for f in files]

@@ -1,0 +1,93 @@
+"""``fogbayes batch DIR --model NAME --out DIR``: one task over a fleet of recordings.
+
+Wires :func:`fogbayes.batch.run_batch`: in-process (``--engine local``), on a Dask cluster of
+``--workers`` processes started here (``--engine dask``) or on an existing scheduler
+(``--address tcp://host:8786``), or, for ``bias-t``/``thermal`` recordings of one length
+and sampling, with one vectorised solve (``--vectorize``). Exit code 0 when every recording
+succeeded, 1 when any failed (``OUT/summary.json`` is written either way, one row per file),
+2 for input that stops the whole run (no folder, no recordings, unknown model or engine).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import app
+from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
+                      TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, say, write_json)
+
+_EPILOG = """Examples:
+
+  fogbayes batch runs/ --model bias-t --out fits/
+
+  fogbayes batch runs/ --model thermal --task compensate --engine dask --workers 4 --out comp/
+
+  fogbayes batch runs/ --model bias-t --engine dask --address tcp://10.0.0.5:8786 --out fits/
+
+  fogbayes batch runs/ --model thermal --orders 2 --vectorize --out fits/ --json -
+"""
+
+
+@app.command(epilog=_EPILOG)
+def batch(
+    folder: Path = typer.Argument(..., help="Folder of recordings (.csv, .parquet, .npz).",
+                                  show_default=False),
+    model: str = typer.Option(..., "--model", "-m",
+                              help="bias-t | thermal | composite | allan | arma."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for the outputs and summary.json."),
+    task: str = typer.Option("fit", "--task", help="fit | compensate | loop | report."),
+    engine: str = typer.Option("local", "--engine", help="local (this process) | dask."),
+    address: str = typer.Option(None, "--address",
+                                help="Dask scheduler, e.g. tcp://host:8786 (default: start a "
+                                     "local cluster)."),
+    workers: int = typer.Option(2, "--workers", help="Worker processes of the local Dask cluster."),
+    pattern: str = typer.Option("*.csv", "--pattern",
+                                help="File pattern(s) in DIR, comma-separated, e.g. '*.csv,*.npz'."),
+    vectorize: bool = typer.Option(False, "--vectorize",
+                                   help="bias-t/thermal, same length and sampling: one batched "
+                                        "least-squares solve for all recordings."),
+    orders: str = typer.Option(None, "--orders", "--order", help="Model order(s), as in 'fogbayes fit'."),
+    option: list[str] = typer.Option(None, "--option", "-O",
+                                     help="Model option KEY=VALUE (repeatable), as in 'fogbayes fit'."),
+    bayes: bool = typer.Option(False, "--bayes", help="Also compute the posterior (fit/compensate/report)."),
+    max_steps: int = typer.Option(5, "--max-steps", min=0, help="Loop: add at most this many effects."),
+    alpha: float = typer.Option(0.01, help="Loop: family-wise false-effect level of each step."),
+    seed: int = typer.Option(0, help="Seed of samplers and bootstrap draws."),
+    json_out: str = typer.Option(None, "--json", help="Also write the summary here ('-' = stdout)."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    temperature: list[str] = TEMPERATURE_OPT,
+    input_rate: str = INPUT_RATE_OPT,
+    quiet: bool = QUIET_OPT,
+):
+    """Fit, compensate, loop or report every recording of a folder, in-process or on Dask."""
+    from ..batch import JobOptions, find_recordings, run_batch
+    from .fit import parse_option_pairs
+
+    # the keywords of fogbayes.data.load, as load_recording passes them (every file alike)
+    load = {"time": time_column, "output": column, "unit": output_unit,
+            "scale_factor": scale_factor, "temperature": temperature or None,
+            "input_rate": input_rate}
+    opts = JobOptions(orders=orders, seed=seed, fit_options=parse_option_pairs(option),
+                      load=load, bayes=bayes, max_steps=max_steps, alpha=alpha)
+    where = f"dask ({address or f'local cluster, {workers} workers'})" if engine == "dask" else engine
+    n_files = len(find_recordings(folder, pattern))  # bad folder/pattern: exit 2 right away
+    with progress(f"{task} {model}: {n_files} recordings [{where}]", total=n_files) as advance:
+        def done(row: dict) -> None:
+            advance(1)
+            if row["status"] != "ok":
+                say(f"failed: {row['error']}")
+
+        summary = run_batch(folder, model=model, out=out, task=task, engine=engine,
+                            address=address, workers=workers, pattern=pattern,
+                            vectorize=vectorize, options=opts, on_done=done)
+    if json_out:
+        write_json(summary, json_out)
+    say(f"{task} {model}: {summary['n_ok']} of {summary['n_files']} recordings ok in "
+        f"{summary['seconds']:.1f} s on {where}; wrote {Path(out) / 'summary.json'}")
+    if summary["n_error"]:
+        raise typer.Exit(1)
