@@ -99,3 +99,21 @@ def test_normal_equations_path_equals_qr_in_a_scaled_basis():
     assert np.max(np.abs(np.asarray(b.params - a.params)) / np.asarray(a.stderr)) < 1e-8
     np.testing.assert_allclose(b.covariance, a.covariance, rtol=1e-9, atol=1e-15)
     assert bool(b.converged)
+
+
+@pytest.mark.parametrize("rank_deficient", [False, True])
+def test_numpy_inputs_take_the_same_qr_as_jax_inputs(rank_deficient):
+    # concrete NumPy arrays are solved by LAPACK directly (no JAX dispatch); every field
+    # must equal the JAX path's to rounding, including the rank-deficiency report
+    rng = np.random.default_rng(4)
+    X = rng.standard_normal((500, 4))
+    if rank_deficient:
+        X[:, 3] = X[:, 0] + X[:, 1]
+    y = X @ np.array([1.0, -2.0, 0.5, 0.0]) + rng.standard_normal(500)
+    w = rng.uniform(0.5, 2.0, 500)
+    a, b = lstsq(X, y, w), lstsq(jnp.asarray(X), jnp.asarray(y), jnp.asarray(w))
+    assert isinstance(a.params, np.ndarray) and bool(a.converged) == (not rank_deficient)
+    assert bool(b.converged) == bool(a.converged)
+    for name in ("params", "covariance", "stderr", "residual", "loss", "sigma2", "dof"):
+        np.testing.assert_allclose(getattr(a, name), np.asarray(getattr(b, name)),
+                                   rtol=1e-9, atol=1e-12, err_msg=name)

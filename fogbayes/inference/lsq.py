@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import optax
 from jax.flatten_util import ravel_pytree
 from jax.scipy.linalg import solve_triangular
@@ -81,6 +82,12 @@ def lstsq(X: Array, y: Array, weights: Array | None = None, *, rcond: float = 1e
         >>> [round(float(v), 9) for v in fit.params]
         [1.0, 2.0]
     """
+    if all(isinstance(a, np.ndarray) for a in (X, y)) and (
+            weights is None or isinstance(weights, np.ndarray)):
+        # concrete NumPy inputs (a workflow's one-off fit): the same QR by LAPACK, without
+        # JAX compiling each primitive again for every new record length
+        return _lstsq_numpy(np.asarray(X, float), np.asarray(y, float),
+                            None if weights is None else np.asarray(weights, float), rcond)
     X, y = jnp.asarray(X, float), jnp.asarray(y, float)
     w = _row_weights(y, weights)
     sw = jnp.sqrt(w)
@@ -93,14 +100,34 @@ def lstsq(X: Array, y: Array, weights: Array | None = None, *, rcond: float = 1e
     # finite but not identified -- reported through ``converged=False``
     Rinv = jax.lax.cond(full_rank, lambda R: solve_triangular(R, eye, lower=False),
                         lambda R: jnp.linalg.pinv(R, rtol=rcond), R)
+    return _finish(X, y, w, sw, Q, Rinv, full_rank, jnp)
+
+
+def _lstsq_numpy(X, y, w, rcond: float) -> FitResult:
+    """:func:`lstsq` in NumPy/LAPACK for concrete inputs (identical formulas)."""
+    from scipy.linalg import solve_triangular as solve_tri
+
+    w = np.ones_like(y) if w is None else w
+    sw = np.sqrt(w)
+    Q, R = np.linalg.qr(X * sw[:, None])
+    d = np.abs(np.diag(R))
+    full_rank = bool(np.min(d) > rcond * np.max(d))
+    p = X.shape[1]
+    Rinv = solve_tri(R, np.eye(p), lower=False) if full_rank else np.linalg.pinv(R, rcond=rcond)
+    return _finish(X, y, w, sw, Q, Rinv, full_rank, np)
+
+
+def _finish(X, y, w, sw, Q, Rinv, full_rank, xp) -> FitResult:
+    """Estimate, residual variance and covariance from the QR pieces (``xp``: np or jnp)."""
+    n, p = X.shape
     beta = Rinv @ (Q.T @ (y * sw))
     resid = y - X @ beta
-    dof = jnp.asarray(n - p, float)
-    wrss = jnp.sum(w * resid**2)
-    s2 = wrss / jnp.maximum(dof, 1.0)
+    dof = xp.asarray(n - p, float)
+    wrss = xp.sum(w * resid**2)
+    s2 = wrss / xp.maximum(dof, 1.0)
     cov = s2 * Rinv @ Rinv.T
-    ok = full_rank & (dof > 0) & jnp.all(jnp.isfinite(beta))
-    return FitResult(beta, cov, jnp.sqrt(jnp.diag(cov)), resid, ok, jnp.asarray(0),
+    ok = full_rank & (dof > 0) & xp.all(xp.isfinite(beta))
+    return FitResult(beta, cov, xp.sqrt(xp.diag(cov)), resid, ok, xp.asarray(0),
                      0.5 * wrss, s2, dof)
 
 

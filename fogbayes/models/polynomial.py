@@ -108,16 +108,18 @@ def design(z, basis: PolyBasis):
     Works in the dtype of ``z`` (float32 stays float32): the centring happens before any
     power is taken, which is what keeps single precision usable.
     """
-    z = jnp.atleast_2d(jnp.asarray(z).T).T  # (n,) -> (n, 1)
-    zs = (z - jnp.asarray(basis.centre, z.dtype)) / jnp.asarray(basis.scale, z.dtype)
+    # NumPy in, NumPy out (no JAX dispatch for a workflow's concrete arrays); jnp otherwise
+    xp = np if isinstance(z, np.ndarray) else jnp
+    z = xp.atleast_2d(xp.asarray(z).T).T  # (n,) -> (n, 1)
+    zs = (z - xp.asarray(basis.centre, z.dtype)) / xp.asarray(basis.scale, z.dtype)
     cols = []
     for e in basis.terms:  # static, a handful of terms: unrolled at trace time
-        col = jnp.ones(z.shape[0], z.dtype)
+        col = xp.ones(z.shape[0], z.dtype)
         for c, ec in enumerate(e):
             if ec:
                 col = col * zs[:, c] ** ec
         cols.append(col)
-    return jnp.stack(cols, axis=1)
+    return xp.stack(cols, axis=1)
 
 
 def evaluate(coef, z, basis: PolyBasis):
