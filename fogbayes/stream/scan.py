@@ -1,0 +1,170 @@
+"""Sampling facts of a large recording from its time column: exact median step, gaps, runs.
+
+The in-memory code derives several choices from ``np.median(np.diff(t))`` over the whole
+record: the gap rule (a step longer than ``gap_factor`` median steps, see
+:func:`fogbayes.preprocess._checks.segment_bounds`), the Savitzky-Golay window in samples,
+the block-grid slack, the sample rate of :attr:`fogbayes.data.Recording.sample_rate`. A
+streaming computation must make the same choices, so it needs the same median, exactly:
+
+* the median is found by radix selection on the IEEE bit patterns of the steps (positive
+  doubles order like their bits as integers): each pass over the time column histograms the
+  next 16 bits of the steps that share the prefix found so far (65 536 counters), at most
+  four passes, fewer when every step in the bucket is equal (the min and max of the bucket
+  are tracked). For an even count it is the mean of the two middle steps, as ``np.median``.
+* one more pass records the gaps and, per run between gaps, its first and last row, first
+  time, and the min, max and mean of its steps (the Savitzky-Golay code treats a run whose
+  steps vary by <= 1e-9 as an exact grid with step = their mean). Memory: O(number of runs).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import TooShortError
+from ..preprocess._checks import GAP_FACTOR
+from .sources import DEFAULT_ROWS, RecordSource
+
+_DIGIT = 16
+
+
+class TimeScan(NamedTuple):
+    """What the in-memory code would compute from the whole time column.
+
+    ``bounds``: run start rows plus ``n`` at the end (as ``segment_bounds``); per run:
+    ``run_t0`` first time, ``run_t_last`` last time, ``run_dt_min``/``run_dt_max``/
+    ``run_dt_mean`` of its steps (NaN for a one-sample run).
+    """
+
+    n: int
+    t_first: float
+    t_last: float
+    dt_median: float
+    dt_min: float
+    dt_max: float
+    gap_factor: float
+    bounds: np.ndarray
+    run_t0: np.ndarray
+    run_t_last: np.ndarray
+    run_dt_min: np.ndarray
+    run_dt_max: np.ndarray
+    run_dt_mean: np.ndarray
+    passes: int
+
+    @property
+    def sample_rate(self) -> float:
+        return 1.0 / self.dt_median
+
+    @property
+    def t_absmax(self) -> float:
+        return max(abs(self.t_first), abs(self.t_last))
+
+
+def _steps(source: RecordSource, rows: int):
+    """(first row of the chunk's steps, steps as int64 bits, steps) over the time column."""
+    last = None
+    for ch in source.chunks(rows, fields=("time",)):
+        t = ch.time
+        dt = np.diff(t) if last is None else np.diff(t, prepend=last)
+        first = ch.start + (1 if last is None else 0)  # step i lies between rows i-1 and i
+        last = float(t[-1])
+        if dt.size:
+            yield first, dt.view(np.int64), dt
+
+
+def _select(source: RecordSource, rows: int, ranks: list[int]) -> tuple[dict[int, float], int]:
+    """Exact order statistics (0-based ranks) of the steps by 16-bit radix passes."""
+    state = {r: (0, 0, r) for r in ranks}  # rank -> (prefix, prefix bits, rank inside)
+    found: dict[int, float] = {}
+    passes = 0
+    while len(found) < len(ranks):
+        todo = {(p, bits) for r, (p, bits, _) in state.items() if r not in found}
+        hist = {key: np.zeros(1 << _DIGIT, np.int64) for key in todo}
+        lo = {key: np.inf for key in todo}
+        hi = {key: -np.inf for key in todo}
+        passes += 1
+        for _, b, dt in _steps(source, rows):
+            for (p, bits) in todo:
+                shift = 64 - bits - _DIGIT
+                sel = b if bits == 0 else b[(b >> (64 - bits)) == p]
+                v = dt if bits == 0 else dt[(b >> (64 - bits)) == p]
+                if sel.size:
+                    hist[p, bits] += np.bincount((sel >> shift) & 0xFFFF, minlength=1 << _DIGIT)
+                    lo[p, bits] = min(lo[p, bits], float(v.min()))
+                    hi[p, bits] = max(hi[p, bits], float(v.max()))
+        for r, (p, bits, k) in list(state.items()):
+            if r in found:
+                continue
+            if lo[p, bits] == hi[p, bits]:  # every step in this bucket is equal
+                found[r] = lo[p, bits]
+                continue
+            cum = np.cumsum(hist[p, bits])
+            d = int(np.searchsorted(cum, k, side="right"))
+            k -= int(cum[d - 1]) if d else 0
+            p, bits = (p << _DIGIT) | d, bits + _DIGIT
+            if bits == 64:
+                found[r] = float(np.array([p], np.int64).view(np.float64)[0])
+            state[r] = (p, bits, k)
+    return found, passes
+
+
+def scan_time(source: RecordSource, *, rows: int = DEFAULT_ROWS,
+              gap_factor: float = GAP_FACTOR) -> TimeScan:
+    """Scan the time column of ``source`` (validated on the way: finite, increasing)."""
+    source.require("time")
+    if source.n < 2:
+        raise TooShortError(f"needs at least 2 samples, got {source.n}", file=source.source,
+                            column=source.time_name, fix="pass a longer record")
+    m = source.n - 1
+    ranks = sorted({(m - 1) // 2, m // 2})
+    found, passes = _select(source, rows, ranks)
+    med = float((found[ranks[0]] + found[ranks[-1]]) / 2.0) if len(ranks) == 2 else found[ranks[0]]
+    limit = gap_factor * med
+    starts, t0s, tl, mins, maxs, sums, counts = [0], [], [], [], [], [], []
+    cur = {"min": np.inf, "max": -np.inf, "sum": [], "count": 0}
+    t_first = t_last = None
+    dt_min, dt_max = np.inf, -np.inf
+
+    def close_run(last_t):
+        tl.append(last_t)
+        mins.append(cur["min"] if cur["count"] else np.nan)
+        maxs.append(cur["max"] if cur["count"] else np.nan)
+        sums.append(math.fsum(cur["sum"]))
+        counts.append(cur["count"])
+
+    prev_t = None
+    for ch in source.chunks(rows, fields=("time",)):
+        t = ch.time
+        if t_first is None:
+            t_first = float(t[0])
+            t0s.append(t_first)
+        dt = np.diff(t) if prev_t is None else np.diff(t, prepend=prev_t)
+        first = ch.start + (1 if prev_t is None else 0)
+        tt = t if prev_t is None else np.concatenate([[prev_t], t])  # tt[i] = row first-1+i
+        if dt.size:
+            dt_min, dt_max = min(dt_min, float(dt.min())), max(dt_max, float(dt.max()))
+        cuts = np.flatnonzero(dt > limit)
+        a = 0
+        for c in list(cuts) + [dt.size]:
+            part = dt[a:c]
+            if part.size:
+                cur["min"] = min(cur["min"], float(part.min()))
+                cur["max"] = max(cur["max"], float(part.max()))
+                cur["sum"].append(float(np.sum(part)))
+                cur["count"] += part.size
+            if c < dt.size:  # a gap before row first + c
+                close_run(float(tt[c]))
+                starts.append(first + int(c))
+                t0s.append(float(tt[c + 1]))
+                cur = {"min": np.inf, "max": -np.inf, "sum": [], "count": 0}
+            a = c + 1
+        prev_t = t_last = float(t[-1])
+    close_run(t_last)
+    counts = np.asarray(counts, float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(counts > 0, np.asarray(sums) / np.maximum(counts, 1), np.nan)
+    return TimeScan(source.n, t_first, t_last, med, dt_min, dt_max, float(gap_factor),
+                    np.asarray(starts + [source.n], dtype=np.int64), np.asarray(t0s),
+                    np.asarray(tl), np.asarray(mins), np.asarray(maxs), mean, passes + 1)
