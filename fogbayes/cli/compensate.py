@@ -69,6 +69,12 @@ def compensate(
                                        help="Raw units per deg/s (default: the fit's)."),
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    stream: bool = typer.Option(False, "--stream",
+                                help="Bounded memory, chunk by chunk: REC is .npz, .parquet, "
+                                "a .npy or a folder of <column>.npy; OUT is .npz, .parquet "
+                                "or a folder (same numbers as the in-memory path)."),
+    chunk_rows: int = typer.Option(1 << 20, "--chunk-rows", min=1024,
+                                   help="Rows read at a time with --stream."),
     quiet: bool = QUIET_OPT,
 ):
     """Compensate a recording with a fitted model; every input row is written.
@@ -79,6 +85,7 @@ def compensate(
       fogbayes compensate run.csv --params fit.json --out compensated.csv
       fogbayes compensate run.csv -p fit.json -o comp.csv --json summary.json
       fogbayes -q compensate run.csv -p fit.json -o comp.csv --json -
+      fogbayes compensate big.parquet -p fit.json -o comp.parquet --stream
     """
     from ..data import write_csv_mixed
     from ..errors import FogbayesError
@@ -91,6 +98,23 @@ def compensate(
                             "compensate", file=str(params), column="model",
                             fix="compensate with a bias-t, thermal or composite fit")
     given = fit_doc.get("input") or {}
+    if stream:
+        from ..stream import compensate_stream, open_source
+
+        src = open_source(rec, time=time_column or "time", output=column or "output",
+                          temperature=list(temperature or []) or None,
+                          input_rate=input_rate or "input_rate",
+                          unit=output_unit or given.get("unit"),
+                          scale_factor=scale_factor if scale_factor is not None
+                          else given.get("scale_factor"))
+        with progress(f"compensating {rec} in chunks of {chunk_rows} rows ({fit_doc['model']})"):
+            res = compensate_stream(src, fit_doc, out, rows=chunk_rows)
+        say(f"wrote {res.path}: {res.n} rows, {res.outliers} flagged as outliers")
+        if json_out:
+            write_json({"file": str(rec), "params": str(params), "out": str(res.path),
+                        "model": fit_doc.get("model"), "rows": res.n, "outliers": res.outliers,
+                        "columns": list(res.columns), "passes": res.passes}, json_out)
+        return
     recording = load_recording(rec, column=column, time_column=time_column,
                                output_unit=output_unit or given.get("unit"),
                                scale_factor=scale_factor if scale_factor is not None
