@@ -4,10 +4,12 @@ Each case is a short simulated test (fixed seed) with one effect present but not
 base model: the loop must add that effect first and end within 10 % of the oracle's
 10 s-block RMS (the true model fitted the same way); clean records must get nothing.
 The full study (several seeds, magnitudes 1-2x, four noise mixes, 1-10 Hz, 3-6 h) is in
-benchmarks/RESULTS_loop.md; measured there: right effect first in 106 of 114 effect
-records (93 %; markov_noise at 1-2x its default: 3 of 12; gradient vs lag is the main
-confusion), final RMS within 10 % of the oracle in 126 of 126, nothing added on 18 of 18
-clean records. Here every case passes with
+benchmarks/RESULTS_loop.md; measured there: right effect first in 108 of 126 effect
+records (86 %; markov_noise at 1-2x its default: 3 of 12, mostly below the family-wise
+threshold at these sizes;
+thermal_lag 7 of 12, the rest kept the indistinguishable two-channel gradient and listed
+the lag as an alternative), final RMS within 10 % of the oracle in 126 of 126, nothing
+added on 71 of 72 clean records. Here every case passes with
 its fixed seed; records are short (3 h at 1 Hz) and effects 2-3x the simulator's
 defaults so that one seed is a fair test of the method, not of luck. Records come from
 the simulator's scenarios (fogbayes.loop.testbed wraps fogbayes.simulate.simulate).
@@ -17,7 +19,6 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 
 from fogbayes.diagnose.fitting import fit_terms
@@ -41,9 +42,7 @@ CASES = [  # effect, model, record options, seed (scenario noise: N 0.005, B 0.0
     ("time_drift", "bias-t", dict(SHORT, magnitude=1.0), 6),
     ("temperature_gradient", "bias-t", dict(SHORT, magnitude=2.0), 3),
     ("temperature_order", "bias-t", dict(SHORT, magnitude=3.0), 8),
-    ("scale_factor_asymmetry", "composite",
-     dict(duration=3600.0, fs=2.0, magnitude=0.05, profile="ratetable"), 9),
-]
+]  # scale-factor and noise effects: tests/test_loop_table_and_noise.py
 
 
 def _oracle_rms(res, effect, params, model):
@@ -68,22 +67,6 @@ def test_nothing_is_added_to_a_clean_record(seed):
     res = run_loop(tr.recording, "bias-t", seed=seed, **RUN)
     assert res.effects == []
     assert res.final.rms == res.initial.rms
-
-
-def test_markov_noise_on_the_allan_model():
-    from fogbayes.data import Metadata, Recording
-    from fogbayes.simulate.noise import allan_noise, markov_noise
-
-    fs, n = 2.0, 21600
-    x = allan_noise(n, fs, seed=3, N=0.003, B=0.02) + markov_noise(n, fs, seed=3, sigma=0.2,
-                                                                    tau_c=200.0)
-    rec = Recording(time=np.arange(n) / fs, output=x, meta=Metadata(sample_rate=fs))
-    res = run_loop(rec, "allan", seed=0, **RUN)
-    assert res.effects == ["markov_noise"]
-    d = res.steps[0].detail
-    # tau_c and sigma come back within a factor 2 (3 h hold ~50 correlation times)
-    assert 100.0 < d["tau_c_s"] < 400.0 and 0.1 < d["sigma_deg_h"] < 0.4
-    assert d["adev_misfit_after"] < d["adev_misfit_before"]
 
 
 def test_json_contract_and_evidence_rule():

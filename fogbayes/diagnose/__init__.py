@@ -2,6 +2,8 @@
 
 * :mod:`.candidates` -- every DESIGN.md effect name as a family of model terms;
 * :mod:`.evidence` -- bootstrap-calibrated screening under the state-space noise model;
+* :mod:`.reml` -- restricted-likelihood noise hyperparameters for the null simulations;
+* :mod:`.compete` -- candidates that explain the same residual, ranked by a bootstrap duel;
 * :mod:`.markov` -- the ``markov_noise`` noise-model candidate;
 * :mod:`.elpd` -- PSIS-LOO / WAIC through ArviZ;
 * :mod:`.scans` -- structure no candidate names (``unexplained``).

@@ -23,10 +23,15 @@ so the calibrated p-value extrapolates to the small levels a decision needs. Can
 are then compared on one scale (log of the calibrated p), and the family of C candidates
 is controlled by Sidak: p_fw = 1 - (1 - p_c)^C.
 
-Decision (stated in every step's JSON ``evidence``): the best candidate's refitted model
-(noise re-estimated, searched value refined) must give p_fw < alpha from its likelihood
-ratio 2 (logL_with - logL_without), AND a positive ELPD difference by PSIS-LOO (ArviZ) on
-the one-step-ahead predictive densities of the block means.
+The loop passes the current model with its REML noise hyperparameters
+(:mod:`fogbayes.diagnose.reml`): ML ones leave too little slow noise in the simulated
+series and make slow candidates look significant too often.
+
+Decision (stated in every step's JSON ``evidence``): a candidate's refitted model (noise
+re-estimated, searched value refined) must give p_fw < alpha from its likelihood ratio
+2 (logL_with - logL_without), AND a positive ELPD difference by PSIS-LOO (ArviZ) on the
+one-step-ahead predictive densities of the block means; candidates that pass are ranked
+against each other by :mod:`fogbayes.diagnose.compete`.
 """
 
 from __future__ import annotations

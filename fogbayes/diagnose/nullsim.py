@@ -1,10 +1,18 @@
-"""Null simulations and grid likelihoods under the state-space noise model.
+"""Null simulations and grid likelihoods under the state-space noise model of
+:mod:`fogbayes.inference.noise_ssm` (its filter, its system matrices; nothing re-derived).
 
 * :func:`simulate` draws noise series from a fitted :class:`~fogbayes.inference.noise_ssm.NoiseSpec`
-  (NumPy, every component an independent AR(1)/random walk by ``lfilter``);
+  (NumPy, every component an independent AR(1)/random walk by ``lfilter``; ``noise_ssm``
+  has likelihoods only, no sampler);
 * :func:`column_logliks` evaluates the profile log-likelihood of many response columns
-  under many hyperparameter vectors in one compiled, vmapped Kalman pass -- the
-  ``markov_noise`` screening and its bootstrap use it.
+  under many hyperparameter vectors: ``noise_ssm.whiten_raw`` (the model's own Kalman
+  filter, one pass over [X, Y] per hyperparameter vector) followed by one GLS per column::
+
+      S_XX = sum_t m_t v^X_t v^X_t' / F_t,   S_Xy = sum_t m_t v^X_t v^y_t / F_t
+      RSS  = S_yy - S_yX S_XX^-1 S_Xy,      log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n]
+
+  (the same profile as ``noise_ssm.gls``, per column). The ``markov_noise`` screening
+  and its bootstrap use it.
 """
 
 from __future__ import annotations
@@ -14,9 +22,11 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax import lax
 
-from ..inference.noise_ssm import UNROLL, NoiseSpec, system, unpack
+from ..inference.noise_ssm import NoiseSpec, system, unpack, whiten_raw
+
+#: Hyperparameter vectors filtered together (bounds memory: batch x n x columns floats).
+BATCH = 16
 
 
 def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int) -> np.ndarray:
@@ -43,35 +53,19 @@ def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int
     return np.sqrt(sigma2) * out
 
 
-def _column_logliks(phi, q, p0, y_cols, X, mask, w, pad):
-    """Profile log-likelihood of each column of y_cols (n, C) regressed on X (n, p)."""
-    d, p, C = phi.shape[0], X.shape[1], y_cols.shape[1]
-    Y = jnp.concatenate([X, y_cols], axis=1) * mask[:, None]
-
-    def step(carry, inp):
-        A, P, Sx, sd, slf = carry
-        yt, m, wt = inp
-        Pz = P.sum(axis=1)
-        F = Pz.sum() + wt
-        v = yt - A.sum(axis=0)
-        k = Pz / F
-        Af = A + m * jnp.outer(k, v)
-        Pf = P - m * jnp.outer(k, Pz)
-        Pn = phi[:, None] * Pf * phi[None, :] + jnp.diag(q)
-        g = m / F
-        return (phi[:, None] * Af, 0.5 * (Pn + Pn.T), Sx + g * jnp.outer(v[:p], v),
-                sd + g * v * v, slf + m * jnp.log(F)), None
-
-    init = (jnp.zeros((d, p + C)), jnp.diag(p0), jnp.zeros((p, p + C)), jnp.zeros(p + C),
-            jnp.zeros(()))
-    (_, _, Sx, sd, slf), _ = lax.scan(step, init, (Y, mask, w), unroll=UNROLL)
-    Sxx = Sx[:, :p] + jnp.diag(pad)
-    Sxy = Sx[:, p:]
+def _profile_columns(V, F, mask, p: int, pad):
+    """Profile log-likelihood of every response column from innovations V = [V_X, V_Y]."""
+    g = mask / F
+    VX, VY = V[:, :p], V[:, p:]
+    GX = VX * g[:, None]
+    Sxx = GX.T @ VX + jnp.diag(pad)
+    Sxy = GX.T @ VY
+    syy = jnp.sum(g[:, None] * VY * VY, axis=0)
     L = jnp.linalg.cholesky(Sxx)
     B = jax.scipy.linalg.cho_solve((L, True), Sxy)
-    rss = sd[p:] - jnp.sum(Sxy * B, axis=0)
+    rss = syy - jnp.sum(Sxy * B, axis=0)
     nobs = mask.sum()
-    return -0.5 * (nobs * jnp.log(2 * jnp.pi * rss / nobs) + slf + nobs)
+    return -0.5 * (nobs * jnp.log(2 * jnp.pi * rss / nobs) + jnp.sum(mask * jnp.log(F)) + nobs)
 
 
 @partial(jax.jit, static_argnums=0)
@@ -81,7 +75,10 @@ def column_logliks(spec: NoiseSpec, thetas, y_cols, X, mask, w, pad):
     Every column is its own regression on X (beta and s2 profiled per column); used to
     evaluate a grid of noise models on data and simulated series in one compiled call.
     """
+    p = X.shape[1]
+    Y = jnp.concatenate([X, y_cols], axis=1)
+
     def one(th):
-        phi, q, p0 = system(spec, unpack(spec, th))
-        return _column_logliks(phi, q, p0, y_cols, X, mask, w, pad)
-    return jax.vmap(one)(thetas)
+        V, F = whiten_raw(spec, th, Y, mask, w)
+        return _profile_columns(V, F, mask, p, pad)
+    return jax.lax.map(one, thetas, batch_size=BATCH)

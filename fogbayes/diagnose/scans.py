@@ -32,6 +32,7 @@ from . import nullsim
 from .context import Context
 from .evidence import _periodogram, frequency_grid, whiten_columns
 from .fitting import ModelFit
+from .reml import with_reml
 
 N_BINS = 10
 
@@ -42,7 +43,7 @@ def _p(obs: float, sims: np.ndarray) -> float:
 
 def _sim_residuals(ctx: Context, fit: ModelFit, n_sims: int, seed: int):
     """Block residual of the data and of simulated noise after the same GLS fit (raw and whitened)."""
-    nf = fit.noise
+    nf = with_reml(ctx, fit).noise  # REML: ML leaves too little slow noise in the nulls
     sims = nullsim.simulate(nf.spec, nf.theta, nf.sigma2, ctx.grid.w, n_sims, seed=seed)
     obs = ctx.grid.mask > 0
     p = fit.X.shape[1]
@@ -206,6 +207,6 @@ def autocorrelation_scan(white: np.ndarray, alpha: float, lags: int = 20) -> lis
 def scan_unexplained(ctx: Context, fit: ModelFit, *, seed: int = 0, alpha: float = 0.01,
                      n_sims: int = 200) -> list[dict]:
     """All scans of the final residual; returns the ``unexplained`` entries."""
-    raw, white = _sim_residuals(ctx, fit, n_sims, seed + 31)
+    _, white = _sim_residuals(ctx, fit, n_sims, seed + 31)
     return (covariate_scans(ctx, fit, alpha) + spectral_scans(ctx, fit, white, alpha)
             + change_point_scans(ctx, white, alpha) + autocorrelation_scan(white, alpha))

@@ -12,6 +12,15 @@
 
 T' = (T - centre) / scale and W' = W / max|W| (centred, scaled bases). On a soaked
 record (T spans < 0.1 deg C) the temperature terms are left out: no T law is identifiable.
+
+Why ``bias-t`` starts at order 2 here while ``fogbayes fit --model bias-t`` defaults to 3
+(:mod:`fogbayes.workflow.thermal`): the fit has no way to ask whether a higher power is
+supported, so it takes a safe order (or chooses one with ``auto``); the loop does ask --
+``temperature_order`` is one of its candidates and is added only on calibrated evidence.
+Starting from the paper 004 order (2) lets the loop show a cubic as a justified step with
+its before/after RMS, where starting at 3 would hide it in the base model; the simulator's
+``temperature_order`` effect (a cubic on top of the scenarios' quadratic) is written for
+that base. ``--orders 3`` gives the workflow's start.
 """
 
 from __future__ import annotations
@@ -107,6 +116,6 @@ def base_terms(ctx: Context, model: str, orders: str | None = None, *, source=No
     if len(o) == 4 and varies:
         op = ctx.cov.op_time if ctx.cov.op_time is not None else ctx.cov.t
         terms.append(Term("drift_tpoly", {"effect": "base", "channel": 0,
-                                          "powers": list(range(0, o[3] + 1)), "centre": c,
+                                          "powers": list(range(o[3] + 1)), "centre": c,
                                           "scale": s, "duration": max(float(np.max(op)), 1.0)}))
     return terms

@@ -4,8 +4,10 @@
     repeat at most max_steps times:
         screen every candidate the model lacks (fixed noise, bootstrap-calibrated p)
         refit the n_refit best with their searched value refined and the noise re-estimated
-        take the smallest calibrated p; add it if p_familywise < alpha, the fixed-noise
-        screening is suggestive (p_familywise < 0.1) and d elpd_loo > 0; otherwise stop
+        a candidate is supported if p_familywise < alpha, the fixed-noise screening is
+        suggestive (p_familywise < 0.1) and d elpd_loo > 0; stop if none is
+        rank the supported ones against each other (bootstrap duels, :mod:`.ranking`)
+        and add the winner, listing the indistinguishable ones as alternatives
     scan the final residual for structure no candidate names (``unexplained``)
 
 See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
@@ -25,6 +27,7 @@ from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
 from ..diagnose.markov import markov_log_p, refit_markov, screen_markov
 from ..diagnose.refine import refine
+from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from ..inference import noise_ssm as ns
 from ..inference.noise_ssm import unpack
@@ -34,24 +37,30 @@ from .bases import ALLOWED, base_terms
 from .compensate import compensate
 from .describe import describe
 from .metrics import Metrics, block_rms, stability
+from .ranking import alternatives, duel_json, rank_supported, supported_trials
 from .result import LoopResult, Rejected, Step
 
-RULE = ("add the best-ranked candidate if (1) its likelihood ratio 2(logL_with - logL_without), "
+RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL_without), "
         "both models refitted by GLS with white + flicker + random-walk noise hyperparameters by "
         "maximum likelihood on block means (Kalman filter), has a family-wise p-value "
         "(Sidak over the candidates) below alpha, the p-value of a searched parameter "
         "(time, frequency, tau, ...) being calibrated by a parametric bootstrap of the "
-        "minimum p over its grid under the fitted noise model; and (2) its PSIS-LOO elpd "
+        "minimum p over its grid under the current model's noise (REML hyperparameters: ML "
+        "ones leave too little slow noise in the null series); and (2) its PSIS-LOO elpd "
         "(one-step-ahead predictive densities of the block means) exceeds the model "
         "without it; a linear candidate must also reach family-wise p < 0.1 in the "
         "fixed-noise screening (the refitted ratio also gains from re-estimating the noise); "
         "markov_noise (a noise component) takes chi^2_2 for its refitted ratio (its measured "
-        "null). Candidates are ranked against each other by the calibrated p-value of the "
-        "refit; alpha = 0.01 by default.")
+        "null). Supported candidates are ranked by the calibrated p-value of the refit, then "
+        "the best meets every other supported linear candidate in a duel: D = 2 logL(other) - "
+        "2 logL(best) at the REML noise of the model with both, each at the best value of "
+        "its own (refined) grid, with a parametric-bootstrap p-value under each hypothesis "
+        "(level 0.05); the "
+        "one not rejected wins; if neither is rejected they are indistinguishable, the one "
+        "with fewer searched parameters is kept and the other listed in 'alternatives'; "
+        "if both are, the higher likelihood. alpha = 0.01 by default.")
 
 
-#: Family-wise screening level a linear candidate must also reach (see _decide).
-SCREEN_GATE = 0.1
 #: log(random-walk / white variance ratio) above which the fit counts as in the walk mode.
 RW_MODE = -12.0
 
@@ -128,7 +137,8 @@ def _evidence(tr: Trial, d: el.ElpdDiff | None, opts: Options, n_cand: int, tria
             "screening": ranking}
 
 
-def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int):
+def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
+                cache: dict | None = None):
     """Screened candidates, each with the whitened model it was screened against.
 
     The noise likelihood is often bimodal: a random walk can take up a step or a warm-up
@@ -136,16 +146,21 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int):
     fit sits in the random-walk mode, every candidate is also screened against the best
     noise model without a random walk, keeping the smaller p (with a factor 2 for the
     two looks), so the shortlist does not lose an effect the walk has swallowed.
+
+    The screening whitens and simulates under the REML noise hyperparameters of the
+    current design (:mod:`fogbayes.diagnose.reml`): ML ones leave too little slow noise
+    in the null series and make slow candidates look significant too often.
     """
     seed = opts.seed + 7919 * step
-    wm, screened = ev.screen(ctx, fit, cands, n_sims=opts.n_sims, seed=seed)
+    wm, screened = ev.screen(ctx, with_reml(ctx, fit, cache), cands, n_sims=opts.n_sims,
+                             seed=seed)
     pairs = {s.candidate.effect: (s, wm) for s in screened}
     spec = fit.noise.spec
     if spec.random_walk and spec.bank_taus and float(unpack(spec, fit.noise.theta).log_rw) > RW_MODE:
         alt_spec = spec._replace(random_walk=False)
         nf = ns.fit_noise(alt_spec, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w)
-        wm2, screened2 = ev.screen(ctx, fit._replace(noise=nf), cands, n_sims=opts.n_sims,
-                                   seed=seed + 1)
+        wm2, screened2 = ev.screen(ctx, with_reml(ctx, fit._replace(noise=nf), cache), cands,
+                                   n_sims=opts.n_sims, seed=seed + 1)
         for s2 in screened2:
             s2 = s2._replace(log_p=s2.log_p + math.log(2.0))
             have = pairs.get(s2.candidate.effect)
@@ -166,7 +181,7 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
     cands = candidates_for(ctx, fit.terms, n_markov=fit.noise.spec.n_markov, effects=opts.effects)
     if not cands:
         return None, None, {"reason": "no candidate left"}
-    pairs = _screen_all(ctx, fit, cands, opts, step)
+    pairs = _screen_all(ctx, fit, cands, opts, step, cache)
     screened = [p[0] for p in pairs]
     n_cand = len(screened)
     if n_cand == 0:
@@ -178,23 +193,16 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
                                     if p[0].candidate.kind == "noise"]
     trials = sorted((t for t in (_safe_trial(ctx, fit, wm, s, n_cand) for s, wm in short)
                      if t is not None), key=lambda t: t.log_p)
-    log_alpha = math.log(opts.alpha)
-    for tr in trials:
-        if tr.log_p_fw >= log_alpha:
-            break
-        # The refitted ratio gains from re-estimating the noise, which the fixed-noise
-        # bootstrap does not see: a linear candidate must also be suggestive (family-wise
-        # p < SCREEN_GATE) in the calibrated screening itself.
-        s = tr.screened
-        if s.candidate.kind != "noise" and \
-                ev.fw_log_p(s.log_p, n_cand) >= math.log(SCREEN_GATE):
-            continue
-        d = el.compare(ctx, tr.fit, fit, seed=opts.seed, cache=cache)
-        if d.diff > 0:
-            return tr, _evidence(tr, d, opts, n_cand, trials, ranking), None
-    best = trials[0] if trials else None
-    evid = None if best is None else _evidence(best, None, opts, n_cand, trials, ranking)
-    return None, None, {"reason": "no candidate supported by the evidence", "best": evid}
+    supported = supported_trials(ctx, fit, trials, opts, n_cand, cache)
+    if not supported:
+        best = trials[0] if trials else None
+        evid = None if best is None else _evidence(best, None, opts, n_cand, trials, ranking)
+        return None, None, {"reason": "no candidate supported by the evidence", "best": evid}
+    (tr, d), duels = rank_supported(ctx, fit, supported, opts, step, cache)
+    evid = _evidence(tr, d, opts, n_cand, trials, ranking)
+    evid["alternatives"] = alternatives(ctx, tr, duels, opts, cache)
+    evid["duels"] = [duel_json(a, b, du) for a, b, du in duels]
+    return tr, evid, None
 
 
 def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps: int = 5,

@@ -15,28 +15,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._json import to_jsonable
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
 from ..diagnose.terms import Term
 from .metrics import Metrics
-
-
-def to_jsonable(obj: Any) -> Any:
-    """NumPy scalars/arrays to plain Python; NaN/inf to None (valid JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        f = float(obj)
-        return f if np.isfinite(f) else None
-    return obj
 
 
 class Step(NamedTuple):

@@ -98,6 +98,12 @@ def loop_section(res):
                  f"{e['log10_p']:.3g}, family-wise {e['log10_p_familywise']:.3g}; "
                  f"d ELPD = {e['elpd_diff']:.4g} +- {e['elpd_diff_se']:.3g}. "
                  f"RMS {s.rms_before:.4g} -> {s.rms_after:.4g} deg/h.")
+        if e.get("alternatives"):  # duels the data could not decide (fogbayes.loop.ranking)
+            sec.note("Indistinguishable alternatives (the simpler was kept): " + "; ".join(
+                f"{a['effect']} (2 dlogL alt - chosen "
+                f"{a['d_2loglik_alternative_minus_chosen']:+.3g}, d ELPD "
+                f"{a['elpd_diff_chosen_minus_alternative']:.3g} +- {a['elpd_diff_se']:.3g})"
+                for a in e["alternatives"]), ok=False)
         sec.table(["candidate", "screening 2 dlogL", "log10 p", "log10 p family-wise"],
                   [[r["effect"], r["screen_lr"], r["log10_p"], r["log10_p_familywise"]]
                    for r in e["screening"]], caption="how the candidates ranked")

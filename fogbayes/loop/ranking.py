@@ -1,0 +1,98 @@
+"""Which of the candidates that pass the rule is added: ranking them against each other.
+
+Every refitted candidate that passes the rule on its own (family-wise p < alpha, the
+screening gate, d elpd_loo > 0) is *supported*. Supported candidates often explain the same
+residual (``temperature_gradient`` vs ``thermal_lag`` vs ``temperature_rate``, ``time_drift``
+vs ``step``): they are ranked against each other by the bootstrap-calibrated duel of
+:mod:`fogbayes.diagnose.compete`, which charges a searched parameter for the noise it can
+follow. The best-ranked supported candidate meets each other supported linear candidate
+in turn; the winner goes on. Candidates the data cannot tell from the chosen one are
+listed in the step's ``evidence["alternatives"]`` with the duel's numbers and the PSIS-LOO
+difference of the two refitted models.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..diagnose import elpd as el
+from ..diagnose import evidence as ev
+from ..diagnose.compete import Duel, duel
+
+#: Family-wise screening level a linear candidate must also reach.
+SCREEN_GATE = 0.1
+
+
+def supported_trials(ctx, fit, trials, opts, n_cand: int, cache) -> list:
+    """Every refitted candidate that passes the rule on its own, best-ranked first."""
+    log_alpha = math.log(opts.alpha)
+    out = []
+    for tr in trials:
+        if tr.log_p_fw >= log_alpha:
+            break
+        # The refitted ratio gains from re-estimating the noise, which the fixed-noise
+        # bootstrap does not see: a linear candidate must also be suggestive (family-wise
+        # p < SCREEN_GATE) in the calibrated screening itself.
+        s = tr.screened
+        if s.candidate.kind != "noise" and \
+                ev.fw_log_p(s.log_p, n_cand) >= math.log(SCREEN_GATE):
+            continue
+        d = el.compare(ctx, tr.fit, fit, seed=opts.seed, cache=cache)
+        if d.diff > 0:
+            out.append((tr, d))
+    return out
+
+
+def rank_supported(ctx, fit, supported, opts, step: int, cache: dict | None = None):
+    """Candidates that explain the same residual, ranked against each other (:mod:`compete`).
+
+    The best-ranked supported candidate meets every other supported linear candidate in a
+    bootstrap-calibrated duel; the winner of each duel goes on. Returns the chosen
+    (trial, elpd difference) and the duels [(leader, other, Duel)].
+    """
+    champ = supported[0]
+    duels = []
+    for other in supported[1:]:
+        if champ[0].screened.candidate.kind != "linear" or \
+                other[0].screened.candidate.kind != "linear":
+            continue
+        du = duel(ctx, fit, (champ[0].screened, champ[0].fit), (other[0].screened, other[0].fit),
+                  n_sims=opts.n_sims, seed=opts.seed + 104729 * (step + 1), cache=cache)
+        if du is None:
+            continue
+        duels.append((champ, other, du))
+        if du.winner == "B":
+            champ = other
+    return champ, duels
+
+
+def duel_json(a, b, du: Duel) -> dict:
+    return {"leader": a[0].screened.candidate.effect, "other": b[0].screened.candidate.effect,
+            "d_2loglik_other_minus_leader": du.d_obs, "p_leader": du.p_a, "p_other": du.p_b,
+            "verdict": du.verdict, "winner": (a if du.winner == "A" else b)[0].screened.candidate.effect,
+            "n_sims": du.n_sims}
+
+
+def alternatives(ctx, chosen, duels, opts, cache) -> list[dict]:
+    """Candidates the data cannot tell from the chosen one (duel verdict "indistinguishable").
+
+    Each is reported with the duel's numbers and the PSIS-LOO difference of the two refitted
+    models (chosen minus alternative, with its standard error): the issue's |d elpd| < 2 se
+    reading, shown beside the bootstrap that also accounts for searched parameters.
+    """
+    out = []
+    for a, b, du in duels:
+        if du.verdict != "indistinguishable" or not (a[0] is chosen or b[0] is chosen):
+            continue
+        alt = b if a[0] is chosen else a
+        d = el.compare(ctx, chosen.fit, alt[0].fit, seed=opts.seed, cache=cache)
+        out.append({"effect": alt[0].screened.candidate.effect,
+                    "likelihood_ratio": alt[0].lr,
+                    "searched": alt[0].screened.candidate.searched,
+                    "d_2loglik_alternative_minus_chosen": du.d_obs if a[0] is chosen else -du.d_obs,
+                    "p_chosen": du.p_a if a[0] is chosen else du.p_b,
+                    "p_alternative": du.p_b if a[0] is chosen else du.p_a,
+                    "elpd_diff_chosen_minus_alternative": d.diff, "elpd_diff_se": d.se,
+                    "note": "indistinguishable by the bootstrap duel; the simpler (fewer "
+                            "searched parameters) or better-ranked one was kept"})
+    return out
