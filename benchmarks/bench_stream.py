@@ -43,15 +43,7 @@ from pathlib import Path
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
-
-
-def best_of(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from _timing import best_of  # benchmarks/ is on sys.path when a script runs
 
 
 def header() -> dict:
