@@ -17,8 +17,8 @@ roofline: compensation throughput in bytes moved per second (every input array r
   every output written) on an in-memory record processed in chunks as the stream does,
   against ``np.copyto`` of the same number of bytes in the same run and a plain NumPy
   version: bias-t (cubic in T: 24 bytes per sample), thermal (2, 2) in T and dT/dt
-  (32 bytes), each with the library's compensator and the fused one
-  (``fogbayes.stream.fast_bias``), and the composite Halley inversion (``Compensator.stream``,
+  (32 bytes), each with the library's (fused, term-by-term) compensator and the former
+  design-matrix form ``y - X(z) @ coef``, and the composite Halley inversion (``Compensator.stream``,
   U's buffer donated: 32 bytes). Also end to end from a page-cached file to a file.
 adev: overlapping ADEV of 1e7 samples vs allantools (octave and 20 per decade), for
   ``fogbayes.stats.allan_variance`` and ``fogbayes.stream.allan_variance_fast``; the
@@ -109,15 +109,15 @@ res.update(adev_s=time.perf_counter() - t0, adev_MB=hwm(), adev_levels=len(r.m),
            adev_tau=r.tau.tolist(), adev_dev=r.dev.tolist())
 t0 = time.perf_counter()
 c = compensate_stream(d, json.load(open(os.path.join(d, "fit.json"))), out, rows=1 << 20,
-                      include_time=False, fused=len(sys.argv) > 3)
+                      include_time=False)
 res.update(comp_s=time.perf_counter() - t0, comp_MB=hwm(), passes=c.passes,
            iterations=c.iterations, outliers=c.outliers)
 print(json.dumps(res))
 """
 
 
-def run_child(d: Path, out: Path, fused: bool = False) -> dict:
-    args = [sys.executable, "-c", _CHILD, str(d), str(out)] + (["fused"] if fused else [])
+def run_child(d: Path, out: Path) -> dict:
+    args = [sys.executable, "-c", _CHILD, str(d), str(out)]
     p = subprocess.run(args, capture_output=True, text=True, check=True)
     return json.loads(p.stdout.strip().splitlines()[-1])
 
@@ -166,7 +166,7 @@ def large(args) -> dict:
         t0 = time.perf_counter()
         make_record(d, n)
         made = time.perf_counter() - t0
-        res = run_child(d, base / f"out_{n:.0e}", fused=args.fused)
+        res = run_child(d, base / f"out_{n:.0e}")
         res.update(n=n, make_s=made, file_GB=8 * n / 1e9,
                    adev_Msamples_s=n / res["adev_s"] / 1e6,
                    comp_Msamples_s=n / res["comp_s"] / 1e6,
@@ -195,7 +195,7 @@ def roofline(args) -> dict:
     from fogbayes.compensate_composite import build_compensator, compensate_numpy
     from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
     from fogbayes.models.thermal import ThermalSpec, bias_t_spec, thermal_basis
-    from fogbayes.stream.fast_bias import fused_bias_compensator
+    from fogbayes.models.polynomial import design
 
     n, c, rep = args.n, args.chunk, args.repeat
     rng = np.random.default_rng(0)
@@ -216,8 +216,9 @@ def roofline(args) -> dict:
         coef = 0.1 * np.arange(1, basis.n_terms + 1)
         bpp = 8 * (2 + z.shape[1])
         row = {"bytes_per_sample": bpp, "copy_GB_s": copy_gbs(bpp * n)}
-        for name, f in (("library", bias_compensator(basis).single),
-                        ("fused", fused_bias_compensator(basis).single)):
+        # "library" is the fused term-by-term kernel; "matrix" the former y - X(z) @ coef
+        matrix = jax.jit(lambda coef, z, y, basis=basis: y - design(z, basis) @ coef)
+        for name, f in (("library", bias_compensator(basis).single), ("matrix", matrix)):
             def run(f=f, coef=coef, z=z):
                 for a in range(0, n, c):
                     out[a:a + c] = f(coef, z[a:a + c], y[a:a + c])
@@ -235,7 +236,7 @@ def roofline(args) -> dict:
                 acc += coef[k] * col
             np.subtract(y, acc, out=out)
         row["numpy_GB_s"] = bpp * n / best_of(numpy_run, max(1, rep // 2)) / 1e9
-        for k in ("library", "fused", "numpy"):
+        for k in ("library", "matrix", "numpy"):
             row[k + "_vs_copy"] = row[k + "_GB_s"] / row["copy_GB_s"]
         res["cases"][label] = row
         print(label, json.dumps(row), flush=True)
@@ -278,18 +279,15 @@ def end_to_end(args) -> dict:
     dst = np.zeros_like(src)
     copy = 2 * src.nbytes / best_of(lambda: np.copyto(dst, src), args.repeat) / 1e9
     row = {"bytes_per_sample": 17, "copy_GB_s": copy}
-    for fused in (False, True):
-        times = []
-        for r in range(4):  # a fresh output each time: overwriting would time the truncation
-            target = d.parent / f"e2e_out{r}"
-            t0 = time.perf_counter()
-            compensate_stream(d, fit, target, rows=1 << 20, flags=False, include_time=False,
-                              fused=fused)
-            times.append(time.perf_counter() - t0)
-            shutil.rmtree(target)
-        row[("fused" if fused else "library") + "_GB_s"] = 17 * n / min(times[1:]) / 1e9
-    for k in ("library", "fused"):
-        row[k + "_vs_copy"] = row[k + "_GB_s"] / copy
+    times = []
+    for r in range(4):  # a fresh output each time: overwriting would time the truncation
+        target = d.parent / f"e2e_out{r}"
+        t0 = time.perf_counter()
+        compensate_stream(d, fit, target, rows=1 << 20, flags=False, include_time=False)
+        times.append(time.perf_counter() - t0)
+        shutil.rmtree(target)
+    row["library_GB_s"] = 17 * n / min(times[1:]) / 1e9
+    row["library_vs_copy"] = row["library_GB_s"] / copy
     shutil.rmtree(d.parent, ignore_errors=True)
     print("end to end", json.dumps(row), flush=True)
     return row
@@ -342,7 +340,6 @@ def main():
     ap.add_argument("--dir", default="/tmp/fogbayes_stream")
     ap.add_argument("--prefix", type=int, default=20_000_000)
     ap.add_argument("--keep", action="store_true")
-    ap.add_argument("--fused", action="store_true")
     ap.add_argument("--n", type=float, default=None)
     ap.add_argument("--chunk", type=int, default=1 << 18)
     ap.add_argument("--repeat", type=int, default=5)

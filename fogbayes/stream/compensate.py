@@ -76,8 +76,7 @@ def _pieces(f, rows: int, *arrays):
 
 
 def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags: bool = True,
-                      include_time: bool = True, dtype=np.float64,
-                      fused: bool = False) -> StreamCompensation:
+                      include_time: bool = True, dtype=np.float64) -> StreamCompensation:
     """Compensate ``source`` (a :class:`RecordSource` or path) with ``fit`` into ``out``.
 
     Args:
@@ -88,21 +87,19 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
         include_time: copy the time column into the output. Without it a bias-t record's
             time column is neither read nor validated (nothing else needs it).
         dtype: dtype of the compensated column (float64 = the in-memory result).
-        fused: bias-t/thermal with :mod:`.fast_bias` (2.5-4x faster kernel; equal to the
-            in-memory result to a couple of roundings per polynomial term, not bit for bit).
     """
     if not isinstance(source, RecordSource):
         source = open_source(source)
     model = fit.get("model") if isinstance(fit, dict) else None
     if model in ("bias-t", "thermal"):
-        return _thermal(source, fit, out, rows, flags, include_time, dtype, fused)
+        return _thermal(source, fit, out, rows, flags, include_time, dtype)
     if model == "composite":
         return _composite(source, fit, out, rows, include_time, dtype)
     raise FogbayesError(f"cannot compensate with model {model!r}", column="model",
                         fix="pass a bias-t, thermal or composite fit document")
 
 
-def _thermal(source, fit, out, rows, flags, include_time, dtype, fused):
+def _thermal(source, fit, out, rows, flags, include_time, dtype):
     from ..compensate import bias_compensator
     from ..export import basis_from_dict
     from ..models.thermal import ThermalSpec
@@ -124,9 +121,7 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype, fused):
                      rate_window_s=proc.rate_window_s)
     coef = np.asarray(p["coef"], dtype=float)
     valid = p.get("valid_range")
-    from .fast_bias import fused_bias_compensator
-
-    f = (fused_bias_compensator if fused else bias_compensator)(basis).single
+    f = bias_compensator(basis).single
     fields = ("time", "output", "temperatures") if include_time or scan else ("output", "temperatures")
 
     def compensated():
