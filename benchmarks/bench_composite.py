@@ -142,6 +142,7 @@ def coverage(seeds: int, bayes: int) -> dict:
     q = stats.norm.ppf(0.95)
     qc = np.r_[np.full(15, q), np.full(3, stats.t.ppf(0.95, 7))]
     hits = {"joint_cells": [], "joint_white": [], "classification": [], "bayes_cells": []}
+    diag = []
     for seed in range(seeds):
         d = _sim_data(1000 + seed)
         for key, fit, qq in (("joint_cells", fit_joint(d, PAPER_ORDERS, noise="cells"), q),
@@ -157,10 +158,16 @@ def coverage(seeds: int, bayes: int) -> dict:
             bf = fit_bayes(d, PAPER_ORDERS, seed=seed, noise="cells")
             lo, hi = np.quantile(bf.raw_draws().reshape(-1, 18), [0.05, 0.95], axis=0)
             hits["bayes_cells"].append((lo < truth) & (truth < hi))
+            diag.append({"rhat_max": bf.rhat_max, "ess_min": bf.ess_min,
+                         "divergences": bf.divergences, "converged": bf.converged})
+            print(seed, diag[-1], flush=True)
         print(seed, {k: round(float(np.mean(v)), 3) for k, v in hits.items() if v}, flush=True)
-    return {k: {"coverage": float(np.mean(v)), "runs": len(v),
-                "per_coefficient": np.mean(v, axis=0).round(2).tolist()}
-            for k, v in hits.items() if v}
+    out = {k: {"coverage": float(np.mean(v)), "runs": len(v),
+               "per_coefficient": np.mean(v, axis=0).round(2).tolist()}
+           for k, v in hits.items() if v}
+    if diag:
+        out["bayes_cells"]["diagnostics"] = diag
+    return out
 
 
 def orders(seeds: int) -> dict:

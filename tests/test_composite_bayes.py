@@ -84,17 +84,14 @@ def test_marginal_is_differentiable():
 
 
 @pytest.mark.slow
-@pytest.mark.skip(reason="fit_bayes hangs intermittently inside XLA on CPU (every XLA "
-                  "thread idle, the main thread waiting for a result that never comes; 3 "
-                  "of ~9 runs on 2026-11-22, with or without async dispatch); issue #5 is "
-                  "open for it. The same check runs by hand in benchmarks/"
-                  "bench_composite.py coverage --bayes k")
 def test_posterior_agrees_with_gls_and_covers_the_truth():
     """One NUTS run (cells noise) on a CI-sized table (20 s per cell, 140 cells)."""
     sim = simulate("paper000", seed=11, dwell=20.0)
     data = rate_data(sim.recording, smooth_s=5.0)[0]
     fit = fit_bayes(data, PAPER_ORDERS, seed=0, noise="cells", warmup=250, samples=250)
-    assert fit.divergences == 0 and fit.rhat_max < 1.02, (fit.rhat_max, fit.ess_min)
+    # log_lam mixes slowly (bulk ESS 180-540 of 1000 draws over seeds 0-2), so split R-hat of
+    # a sound run scatters over 1.00-1.03 here; a stuck chain gives > 1.1
+    assert fit.divergences == 0 and fit.rhat_max < 1.05, (fit.rhat_max, fit.ess_min)
     gls = fit_joint(data, PAPER_ORDERS, noise="cells")
     th = fit.theta.reshape(-1, 18)
     sd = np.sqrt(np.diag(gls.cov))
