@@ -45,6 +45,22 @@ def test_kernel_paths_agree(method):
     assert np.all(np.asarray(count) == y.size + 1 - 2 * np.array(ms))
 
 
+@pytest.mark.parametrize("taus", ["octave", "dense"])
+def test_blocked_default_equals_the_jitted_kernels_with_gaps_and_batches(taus):
+    # allan_deviation's CPU default for oadev (NumPy accumulators) against the XLA kernels,
+    # on a batch whose second sensor has NaN gaps: same variances, same kept-term counts
+    Y = np.stack([_gyro_like(30_000, 5), _gyro_like(30_000, 6)])
+    Y[1, 1000:1010] = np.nan
+    Y[1, 20_000] = np.nan
+    got = allan_deviation(Y, 2.0, taus=taus)
+    ref = allan_deviation(Y, 2.0, taus=taus, method="chunked")
+    np.testing.assert_allclose(got.var, ref.var, rtol=1e-11)
+    np.testing.assert_array_equal(got.n_terms, ref.n_terms)
+    np.testing.assert_array_equal(got.excluded, ref.excluded)
+    with pytest.raises(FogbayesError, match="oadev only"):
+        allan_deviation(Y[0], 2.0, kind="mdev", method="blocked")
+
+
 def test_batch_vmap_equals_rows_and_compiles_once():
     Y = np.stack([_gyro_like(5000, s) for s in range(4)])
     ms = (1, 4, 16, 64)

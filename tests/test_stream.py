@@ -40,7 +40,7 @@ from fogbayes.stream import (
     stream_allan,
 )
 from fogbayes.stream.allan import GridError
-from fogbayes.stream.allan_core import OctaveAccumulator, PhaseAccumulator, variance
+from fogbayes.stats.allan_accumulators import OctaveAccumulator, PhaseAccumulator, variance
 from fogbayes.stream.pauta import stream_pauta
 
 

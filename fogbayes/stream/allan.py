@@ -2,7 +2,7 @@
 
 :func:`stream_allan` reads the output column chunk by chunk (:mod:`.sources`), converts it
 to a rate in ``unit``, places it on the uniform sample grid and feeds the accumulators of
-:mod:`.allan_core`. The numbers are those of :func:`fogbayes.stats.allan.allan_deviation`
+:mod:`fogbayes.stats.allan_accumulators`. The numbers are those of :func:`fogbayes.stats.allan.allan_deviation`
 (``kind="oadev"``) and of the Allan workflow (which also places the rate on its grid, see
 :func:`fogbayes.workflow.allan.uniform_rate`) to rounding, about 1e-12 relative.
 
@@ -36,8 +36,8 @@ import numpy as np
 from ..errors import FogbayesError, TooShortError
 from ..stats.taus import cluster_sizes
 from ..units import convert_rate
-from .allan_core import DEFAULT_CHUNK, variance
-from .fast_allan import accumulator
+from ..stats.allan_accumulators import DEFAULT_CHUNK, variance
+from ..stats.allan_blocked import accumulator
 from .scan import scan_time
 from .sources import DEFAULT_ROWS, RecordSource, open_source
 

@@ -1,7 +1,7 @@
 """In-memory overlapping Allan variance by the streaming accumulators (NumPy, cache-blocked).
 
 The same estimator as :func:`fogbayes.stats.allan_kernels.allan_variance` with
-``kind="oadev"`` (NIST SP 1065 eq. 11; see :mod:`fogbayes.stream.allan_core`), computed by
+``kind="oadev"`` (NIST SP 1065 eq. 11; see :mod:`fogbayes.stats.allan_accumulators`), computed by
 walking the record once in cache-sized chunks:
 
 * octave cluster sizes (any subset of 1, 2, 4, ...): the Haar pyramid, two additions and a
@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import FogbayesError, TooShortError
-from ..stats.taus import cluster_sizes
-from .allan_core import DEFAULT_CHUNK, OctaveAccumulator, PhaseAccumulator, variance
+from .taus import cluster_sizes
+from .allan_accumulators import DEFAULT_CHUNK, OctaveAccumulator, PhaseAccumulator, variance
 
 
 def is_octave(ms) -> bool:
