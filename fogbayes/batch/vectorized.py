@@ -58,7 +58,13 @@ from ..workflow._thermal_data import (
     make_processing,
     sample_covariates,
 )
-from ..workflow.thermal import MODELS, _clamp, _segments, _spec, parse_orders
+from ..workflow.thermal import (
+    MODELS,
+    clamp_covariates,
+    model_spec,
+    parse_orders,
+    thermal_segments,
+)
 from .files import FleetError
 
 SOLVERS = {"gram": lstsq_gram, "qr": lstsq}
@@ -181,7 +187,7 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
                            **{k: options[k] for k in Processing._fields[1:] if k in options})
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     t_order, r_order = parse_orders(model, orders)[0]
-    spec = _spec(model, t_order, r_order, options)
+    spec = model_spec(model, t_order, r_order, options)
     keep, prep = [], []
     for i, rec in enumerate(recs):
         try:
@@ -212,8 +218,8 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     valid = [{nm: (float(a), float(b)) for nm, a, b in
               zip(bs.names, bl.z.min(axis=0), bl.z.max(axis=0))} for bs, bl in zip(bases, blocks)]
     # compensated output for the metrics, covariates clamped as compensation clamps them
-    after = [y - b for y, b in zip(rates, _bias(fits, [_clamp(z, bs, v) for z, bs, v in
-                                                       zip(zs, bases, valid)], bases))]
+    clamped = [clamp_covariates(z, bs, v) for z, bs, v in zip(zs, bases, valid)]
+    after = [y - b for y, b in zip(rates, _bias(fits, clamped, bases))]
     for s, rec in enumerate(good):
         coef, cov, resid, s2, dof, ok = fits[s]
         out[keep[s]] = _document(rec, model, spec, proc, windows, bases[s], blocks[s], zs[s],
@@ -251,6 +257,7 @@ def _document(rec, model, spec, proc, windows, basis, blocks, z, rate, after, va
                 "residual_std": float(np.sqrt(s2)), "dof": int(dof),
                 "stderr_note": "least-squares standard errors assume white block means; "
                                "see 'bayes' for intervals with AR noise"},
-        "metrics": segment_report(rate, after, rec.time, _segments(rec, z), windows=windows),
+        "metrics": segment_report(rate, after, rec.time, thermal_segments(rec, z),
+                                  windows=windows),
         "vectorized": True,
     }

@@ -104,9 +104,9 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
     from ..export import basis_from_dict
     from ..models.thermal import ThermalSpec
     from ..workflow._thermal_data import Processing
-    from ..workflow.thermal import _check_fit, _clamp
+    from ..workflow.thermal import check_fit_document, clamp_covariates
 
-    _check_fit(fit)
+    check_fit_document(fit)
     p = fit["params"]
     spec = ThermalSpec(**{k: tuple(v) if isinstance(v, list) else v for k, v in p["spec"].items()})
     proc = Processing(**fit["processing"])
@@ -127,7 +127,7 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
     def compensated():
         for ch, z in covariate_chunks(source, plan, scan, rows, fields=fields):
             if valid is not None:
-                z = _clamp(z, basis, valid)
+                z = clamp_covariates(z, basis, valid)
             rate = np.asarray(convert_rate(ch.output, source.unit, "deg/h",
                                            scale_factor=source.scale_factor), dtype=float)
             yield ch, _pieces(lambda zz, yy: f(coef, zz, yy), rows, z, rate)
@@ -156,7 +156,7 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
 
 
 def _composite(source, fit, out, rows, include_time, dtype):
-    from ..workflow.composite import _compensator
+    from ..workflow.composite import compensator_from_fit
 
     unit = (fit.get("input") or {}).get("unit")
     if unit is not None and source.unit != unit:
@@ -164,7 +164,7 @@ def _composite(source, fit, out, rows, include_time, dtype):
                         f"{unit}", file=source.source, column="output",
                         fix=f"open the recording with unit {unit}")
     source.require("time", "output", "temperature")
-    comp = _compensator(fit)
+    comp = compensator_from_fit(fit)
     conv = fit.get("operating_time", "cell")
     by_cell = conv == "cell" and source.input_rate_name is not None
     fields = ("time", "output", "temperatures") + (("input_rate",) if by_cell else ())

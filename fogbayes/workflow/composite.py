@@ -179,12 +179,12 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
             "sigma_draws": (bf.sigma.reshape(-1)[::step] / sc.U_scale).tolist(),
         }
         converged = converged and bf.converged
-    comp = _compensator(doc, method=compensation)
+    comp = compensator_from_fit(doc, method=compensation)
     W = np.asarray(comp(data.U, data.T, data.t).rate)
     rates = {"before": nominal_rate(to_raw(comp.params, comp.scaling), data.U, T_nominal=T_nominal),
              "fogbayes": W}
     if compensation != "paper":
-        rates["paper"] = np.asarray(_compensator(doc, method="paper")(data.U, data.T, data.t).rate)
+        rates["paper"] = np.asarray(compensator_from_fit(doc, method="paper")(data.U, data.T, data.t).rate)
     cell_T = data.temperature_levels[data.cell_i]
     cell_W = data.rate_levels[data.cell_j]
     rows = before_after(cell_T, cell_W, data.cell, rates)
@@ -212,7 +212,7 @@ def _params_from_doc(fit: dict) -> tuple[FullParams, Scaling, Orders]:
     return unpack(theta, orders), sc, orders
 
 
-def _compensator(fit: dict, *, method: str | None = None) -> Compensator:
+def compensator_from_fit(fit: dict, *, method: str | None = None) -> Compensator:
     p, sc, _ = _params_from_doc(fit)
     cal = fit["calibrated"]
     comp = fit.get("compensation", {})
@@ -242,7 +242,7 @@ def _inputs(rec, fit: dict):
 def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
     """Estimated input rate (deg/s) of every row; ``outlier`` where it is not invertible."""
     U, T, t = _inputs(rec, fit)
-    res = _compensator(fit)(U, T, t)
+    res = compensator_from_fit(fit)(U, T, t)
     return {"time": np.asarray(rec.time), "rate": np.asarray(res.rate),
             "outlier": ~np.asarray(res.in_range)}
 
@@ -259,7 +259,7 @@ def compensate_interval(rec, fit: dict, *, prob: float = 0.9, seed: int = 0) -> 
         raise FogbayesError("the fit has no posterior draws", column="bayes",
                             fix="fit with bayes=True (fogbayes fit --bayes)")
     U, T, t = _inputs(rec, fit)
-    comp = _compensator(fit)
+    comp = compensator_from_fit(fit)
     _, sc, orders = _params_from_doc(fit)
     draws = unpack(jnp.asarray(np.asarray(fit["bayes"]["draws_scaled"], float)), orders)
     med, lo, hi = compensate_draws(draws, sc, jnp.asarray(comp.box), U, T, t,

@@ -82,7 +82,7 @@ def parse_orders(model: str, orders: str | None) -> list[tuple[int, int]]:
     return [(t, r) for t in t_orders for r in r_orders]
 
 
-def _spec(model: str, t_order: int, rate_order: int, opts: dict) -> ThermalSpec:
+def model_spec(model: str, t_order: int, rate_order: int, opts: dict) -> ThermalSpec:
     gradient = opts.get("gradient") or ()
     if gradient is True:
         gradient = ("temperature_2", "temperature")
@@ -108,7 +108,7 @@ def _bias(basis, coef, z) -> np.ndarray:
     return np.asarray(design(z, basis) @ np.asarray(coef))
 
 
-def _clamp(z: np.ndarray, basis, valid: dict) -> np.ndarray:
+def clamp_covariates(z: np.ndarray, basis, valid: dict) -> np.ndarray:
     """Covariates held inside the range the fit saw (a polynomial extrapolates wildly)."""
     lo = np.array([valid[n][0] for n in basis.names])
     hi = np.array([valid[n][1] for n in basis.names])
@@ -142,7 +142,7 @@ def _choose_order(specs, blocks, proc, criterion: str, seed: int, bayes_opts: di
                   "scores": scores, "best": [best.t_order, best.rate_order]}
 
 
-def _segments(rec, z):
+def thermal_segments(rec, z):
     try:
         return segment_thermal(rec.time, z[:, 0])
     except FogbayesError:  # too short or irregular for the segmenter: full record only
@@ -176,7 +176,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
                            **{k: options[k] for k in Processing._fields[1:] if k in options})
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     rate = rec.rate("deg/h")
-    specs = [_spec(model, t, r, options) for t, r in parse_orders(model, orders)]
+    specs = [model_spec(model, t, r, options) for t, r in parse_orders(model, orders)]
     z = sample_covariates(rec, specs[0], proc)  # the same covariates for every order
     blocks = fit_blocks(rec, rate, z, specs[0], proc, None)
 
@@ -193,7 +193,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
     coef = np.asarray(fit.params)
     lo, hi = blocks.z.min(axis=0), blocks.z.max(axis=0)
     valid = {name: (float(a), float(b)) for name, a, b in zip(basis.names, lo, hi)}
-    after = compensate_bias(coef, _clamp(z, basis, valid), rate, basis)  # as compensation does
+    after = compensate_bias(coef, clamp_covariates(z, basis, valid), rate, basis)  # as compensation does
     units = {"output": "deg/h", "T": "degC", "dT/dt": "degC/min"}
     warnings = []
     if not bool(fit.converged):
@@ -214,7 +214,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
                 "residual_std": float(np.sqrt(fit.sigma2)), "dof": int(fit.dof),
                 "stderr_note": "least-squares standard errors assume white block means; "
                                "see 'bayes' for intervals with AR noise"},
-        "metrics": segment_report(rate, after, rec.time, _segments(rec, z), windows=windows),
+        "metrics": segment_report(rate, after, rec.time, thermal_segments(rec, z), windows=windows),
     }
     if selection:
         doc["order_selection"] = selection
@@ -227,7 +227,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
     return doc
 
 
-def _check_fit(fit: dict) -> None:
+def check_fit_document(fit: dict) -> None:
     if not isinstance(fit, dict) or fit.get("model") not in MODELS or "params" not in fit:
         raise FogbayesError(f"not a bias-t/thermal fit document (model={fit.get('model')!r})"
                             if isinstance(fit, dict) else "the fit document is not a JSON object",
@@ -236,14 +236,14 @@ def _check_fit(fit: dict) -> None:
 
 def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
     """Compensated output (input unit) and 3-sigma outlier flags, one row per input row."""
-    _check_fit(fit)
+    check_fit_document(fit)
     p = fit["params"]
     spec = ThermalSpec(**{k: tuple(v) if isinstance(v, list) else v for k, v in p["spec"].items()})
     proc = Processing(**fit["processing"])
     basis = basis_from_dict(p["basis"])
     z = sample_covariates(rec, spec, proc)
     if "valid_range" in p:
-        z = _clamp(z, basis, p["valid_range"])
+        z = clamp_covariates(z, basis, p["valid_range"])
     rate = rec.rate("deg/h")
     comp = compensate_bias(np.asarray(p["coef"], dtype=float), z, rate, basis)
     flags = pauta_flags(comp, n_sigma=float(proc.n_sigma))
