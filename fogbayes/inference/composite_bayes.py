@@ -313,7 +313,9 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
     theta = np.asarray(theta).reshape(chains, samples, -1)
     point = np.asarray(point).reshape(chains, samples, K)
     idata = az.from_dict(posterior={**post, "theta": theta}, log_likelihood={"cells": point})
-    summ = az.summary(idata, var_names=list(post), kind="diagnostics")
+    # unrounded: az.summary rounds to 2 decimals by default, and a rounded 1.01 would fail
+    # the strict R-hat < 1.01 test for any value in [1.005, 1.01)
+    summ = az.summary(idata, var_names=list(post), kind="diagnostics", round_to="none")
     rhat, ess = float(np.nanmax(summ["r_hat"])), float(np.nanmin(summ["ess_bulk"]))
     ok = bool(rhat < 1.01 and ess >= 100 * chains and div == 0)
     return BayesFit(theta, post["sigma"] * sc.U_scale, orders, sc, noise, idata, rhat, ess,
