@@ -30,7 +30,7 @@ cell's mean is taken conditionally on the other cells', as in :mod:`.composite_c
 
 from __future__ import annotations
 
-from functools import partial
+from functools import lru_cache, partial
 from typing import NamedTuple
 
 import jax
@@ -262,6 +262,70 @@ def cell_data(X, y, cell, t_abs, K, p_ar):
             "first": jnp.asarray(first), "st": {k: jnp.asarray(v) for k, v in sd.items()}}
 
 
+@lru_cache(maxsize=8)
+def _sampler(noise: str, p_ar: int, prior_scale: float, target_accept: float, warmup: int,
+             samples: int, chain_method: str):
+    """Warm-up + sampling of NUTS chains as one jitted function, compiled once per
+    configuration and data shape (NumPyro's functional ``hmc`` API; the data are arguments,
+    so another table of the same shape reuses it: a new ``MCMC`` object per call compiled
+    again for ~15 s). Returns constrained draws (chains, samples, ...) and divergences."""
+    from numpyro.infer.hmc import hmc
+    from numpyro.infer.util import constrain_fn, potential_energy
+
+    model = partial(_model, noise=noise, p_ar=p_ar, prior_scale=prior_scale)
+    init_kernel, sample_kernel = hmc(
+        potential_fn_gen=lambda d, start: partial(potential_energy, model, (d, start), {}),
+        algo="NUTS")
+
+    def chain(key, z0, d, start):
+        args = (d, start)
+        state = init_kernel(z0, warmup, target_accept_prob=target_accept, model_args=args,
+                            rng_key=key)
+
+        def step(st, _):
+            st = sample_kernel(st, model_args=args)
+            return st, (st.z, st.diverging)
+
+        _, (zs, div) = jax.lax.scan(step, state, None, length=warmup + samples)
+        zs = jax.tree.map(lambda v: v[warmup:], zs)
+        post = jax.vmap(lambda z: constrain_fn(model, args, {}, z, return_deterministic=True))(zs)
+        return post, div[warmup:]
+
+    if chain_method == "sequential":
+        return jax.jit(lambda keys, z0, d, start: jax.lax.map(
+            lambda kz: chain(kz[0], kz[1], d, start), (keys, z0)))
+    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None)))
+
+
+def _unconstrained(init: dict, chains: int) -> dict:
+    """Start values (the GLS fit's) in NUTS's unconstrained space, one row per chain."""
+    from numpyro.distributions import constraints
+    from numpyro.distributions.transforms import biject_to
+
+    support = {"u_sigma": constraints.real, "log_lam": constraints.real,
+               "rho": constraints.interval(0.0, 0.99), "pacf": constraints.interval(-1.0, 1.0)}
+    out = {}
+    for k, v in init.items():
+        u = biject_to(support[k]).inv(jnp.asarray(v, dtype=float))
+        out[k] = jnp.broadcast_to(u, (chains,) + jnp.shape(u))
+    return out
+
+
+@partial(jax.jit, static_argnames=("noise", "prior_scale", "K"))
+def _draw_theta(flat: dict, keys, d: dict, *, noise: str, prior_scale: float, K: int):
+    """theta | (s, eta), y drawn exactly for every posterior draw, and its per-cell
+    log-likelihood. The data go in as an argument, not a closure: closed-over arrays become
+    XLA constants, whose folding made this compile take tens of seconds."""
+    def one(eta, key):
+        G, h, _, _ = _suff(noise, eta, d)
+        cf, m = _conditional(G, h, eta["sigma"] ** 2, prior_scale)
+        z = jax.random.normal(key, m.shape)
+        theta = m + jax.scipy.linalg.solve_triangular(cf.T, z, lower=False)
+        return theta, _pointwise(noise, eta, theta, d, K)
+
+    return jax.vmap(one)(flat, keys)
+
+
 def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells",
               scaling: Scaling | None = None, prior_scale: float = 10.0, chains: int = 4,
               warmup: int = 500, samples: int = 500, target_accept: float = 0.85,
@@ -273,9 +337,8 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
     ``converged`` is False otherwise.
     """
     import arviz as az
-    from numpyro.infer import MCMC, NUTS, init_to_value
 
-    from ..errors import TooShortError
+    from ..errors import FogbayesError, TooShortError
 
     sc = scaling or default_scaling(data)
     X, y = _xy(data, orders, sc)
@@ -287,29 +350,20 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
                             column="input_rate", fix="hold every rate longer or lower the AR order")
     d = cell_data(X, y, data.cell, np.asarray(data.time, float), K, p_ar)
     start, init = _start(data, orders, sc, noise, p_ar)
-    model = partial(_model, noise=noise, p_ar=p_ar, prior_scale=prior_scale)
-    kernel = NUTS(model, target_accept_prob=target_accept,
-                  init_strategy=init_to_value(values={k: jnp.asarray(v) for k, v in init.items()}))
-    mcmc = MCMC(kernel, num_warmup=warmup, num_samples=samples, num_chains=chains,
-                chain_method=chain_method, progress_bar=False, jit_model_args=True)
-    mcmc.run(jax.random.PRNGKey(seed), d, {k: jnp.asarray(v) for k, v in start.items()},
-             extra_fields=("diverging",))
-    post = {k: np.asarray(v) for k, v in mcmc.get_samples(group_by_chain=True).items()}
-    post.pop("u_sigma")
-    div = int(np.sum(np.asarray(mcmc.get_extra_fields()["diverging"])))
-
-    def draw_theta(eta, key, d):
-        G, h, _, _ = _suff(noise, eta, d)
-        cf, m = _conditional(G, h, eta["sigma"] ** 2, prior_scale)
-        z = jax.random.normal(key, m.shape)
-        theta = m + jax.scipy.linalg.solve_triangular(cf.T, z, lower=False)
-        return theta, _pointwise(noise, eta, theta, d, K)
+    if chain_method not in ("vectorized", "sequential"):
+        raise FogbayesError(f"unknown chain_method {chain_method!r}", column="chain_method",
+                            fix="use 'vectorized' (chains vmapped) or 'sequential'")
+    run = _sampler(noise, p_ar, float(prior_scale), float(target_accept), int(warmup),
+                   int(samples), chain_method)
+    keys = jax.random.split(jax.random.PRNGKey(seed), chains)
+    draws, diverging = run(keys, _unconstrained(init, chains), d,
+                           {k: jnp.asarray(v) for k, v in start.items()})
+    post = {k: np.asarray(v) for k, v in draws.items() if k != "u_sigma"}
+    div = int(np.sum(np.asarray(diverging)))
 
     flat = {k: jnp.asarray(v.reshape((-1,) + v.shape[2:])) for k, v in post.items()}
     keys = jax.random.split(jax.random.PRNGKey(seed + 1), flat["sigma"].shape[0])
-    # the data go in as an argument, not a closure: closed-over arrays become XLA
-    # constants, whose folding made this compile take tens of seconds
-    theta, point = jax.jit(jax.vmap(draw_theta, in_axes=(0, 0, None)))(flat, keys, d)
+    theta, point = _draw_theta(flat, keys, d, noise=noise, prior_scale=float(prior_scale), K=K)
     theta = np.asarray(theta).reshape(chains, samples, -1)
     point = np.asarray(point).reshape(chains, samples, K)
     idata = az.from_dict(posterior={**post, "theta": theta}, log_likelihood={"cells": point})
