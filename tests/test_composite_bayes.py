@@ -122,3 +122,10 @@ def test_cells_pointwise_matches_the_order_comparison_module():
     ref = _cell_pointwise(X, Y, CELL, T_ABS, lam, rho, theta[None], s ** 2)[0]
     # cells are in time order in both (CELL is sorted by time here)
     np.testing.assert_allclose(ours, ref, rtol=1e-10)
+
+
+def test_unknown_chain_method_is_named_before_any_work():
+    from fogbayes.errors import FogbayesError
+
+    with pytest.raises(FogbayesError, match="chain_method"):
+        fit_bayes(None, PAPER_ORDERS, seed=0, chain_method="parallel")

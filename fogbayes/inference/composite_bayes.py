@@ -340,6 +340,9 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
 
     from ..errors import FogbayesError, TooShortError
 
+    if chain_method not in ("vectorized", "sequential"):
+        raise FogbayesError(f"unknown chain_method {chain_method!r}", column="chain_method",
+                            fix="use 'vectorized' (chains vmapped) or 'sequential'")
     sc = scaling or default_scaling(data)
     X, y = _xy(data, orders, sc)
     K = int(data.cell.max()) + 1
@@ -350,9 +353,6 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
                             column="input_rate", fix="hold every rate longer or lower the AR order")
     d = cell_data(X, y, data.cell, np.asarray(data.time, float), K, p_ar)
     start, init = _start(data, orders, sc, noise, p_ar)
-    if chain_method not in ("vectorized", "sequential"):
-        raise FogbayesError(f"unknown chain_method {chain_method!r}", column="chain_method",
-                            fix="use 'vectorized' (chains vmapped) or 'sequential'")
     run = _sampler(noise, p_ar, float(prior_scale), float(target_accept), int(warmup),
                    int(samples), chain_method)
     keys = jax.random.split(jax.random.PRNGKey(seed), chains)
