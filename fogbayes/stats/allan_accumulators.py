@@ -26,9 +26,9 @@ past, each keeping only what the largest lag needs:
 
 Both subtract a provisional offset (the first chunk's mean; the variance does not depend on
 a constant offset) and accumulate each level's sum of squares in pieces of 8192 terms
-(``numpy.dot``, kept below OpenBLAS's threading threshold, which on a busy 2-core machine
-made it 20x slower) combined by Neumaier-compensated addition, so a 2e9-sample sum loses no
-more than a few units in the last place.
+combined by Neumaier-compensated addition, so a 2e9-sample sum loses no more than a few
+units in the last place. The per-chunk work of all levels is one call of a fused compiled
+loop (:mod:`fogbayes.stats.allan_loops`); these classes keep the buffers and the bookkeeping.
 
 Gaps: NaN samples are missing. A term is kept only if none of its ``2m`` samples is NaN (as
 :mod:`fogbayes.stats.allan_kernels` does); ``counts`` are the terms kept. The pyramid lets
@@ -38,52 +38,14 @@ piece whose sum came out NaN; the phase accumulator keeps a running NaN count.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..errors import FogbayesError
+from .allan_loops import empty_gaps, octave_step, phase_step
 
-PIECE = 8192  # terms per numpy.dot: single-threaded in OpenBLAS (threshold 10 000)
+_NO_GAPS = empty_gaps()
+
 DEFAULT_CHUNK = 1 << 16  # samples per internal step: a few arrays of 512 KB stay in L2/L3
-
-
-class _Compensated:
-    """Neumaier-compensated running sums, one per level."""
-
-    def __init__(self, k: int):
-        self.s = [0.0] * k
-        self.c = [0.0] * k
-
-    def add(self, i: int, x: float) -> None:
-        s = self.s[i]
-        t = s + x
-        self.c[i] += (s - t) + x if abs(s) >= abs(x) else (x - t) + s
-        self.s[i] = t
-
-    def total(self) -> np.ndarray:
-        return np.array([s + c for s, c in zip(self.s, self.c)])
-
-
-_VECDOT = getattr(np, "vecdot", None)  # NumPy >= 2: one call for all pieces
-
-
-def _sumsq(d: np.ndarray) -> tuple[float, int]:
-    """Sum of squares of the finite entries of ``d`` and how many are NaN."""
-    full = d.size - d.size % PIECE
-    if _VECDOT is not None and full:
-        rows = d[:full].reshape(-1, PIECE)
-        s = float(_VECDOT(rows, rows).sum())
-    else:
-        full, s = 0, 0.0
-    for a in range(full, d.size, PIECE):
-        p = d[a:a + PIECE]
-        s += float(np.dot(p, p))
-    if not math.isnan(s):  # the usual case costs nothing more
-        return s, 0
-    bad = np.isnan(d)
-    g = d[~bad]
-    return float(np.dot(g, g)), int(bad.sum())
 
 
 def _offset(y: np.ndarray) -> float:
@@ -108,70 +70,44 @@ class OctaveAccumulator:
         self.ms = tuple(1 << k for k in range(levels))
         self.chunk = int(chunk)
         c = self.chunk
-        # m < chunk: [last m block sums | new chunk]; m >= chunk: a ring of m + chunk values
-        # whose slots are aligned to the chunk, so old and new never wrap or overlap.
-        self._buf = [np.zeros(m + c) for m in self.ms]
-        self._ring = [m >= c and m % c == 0 for m in self.ms]
         if any(m >= c and m % c for m in self.ms):
             raise FogbayesError(f"chunk {c} must be a power of two", fix="pass chunk=65536")
-        self._d = np.empty(c)
-        self._sums = _Compensated(levels)
+        # level k: [last m block sums | new chunk] when m < chunk; when m >= chunk a ring of
+        # m + chunk values whose slots are aligned to the chunk, so old and new never wrap
+        # or overlap. All levels live in one array for the compiled step.
+        self._ms = np.asarray(self.ms, np.int64)
+        self._size = self._ms + c
+        self._base = np.concatenate([[0], np.cumsum(self._size)[:-1]]).astype(np.int64)
+        self._ring = np.asarray([m >= c for m in self.ms])
+        self._store = np.zeros(int(self._size.sum()))
+        self._sums = np.zeros(levels)
+        self._comps = np.zeros(levels)
         self._nan = np.zeros(levels, np.int64)
         self.offset: float | None = None
         self.n = 0
 
     @property
     def nbytes(self) -> int:
-        return sum(b.nbytes for b in self._buf) + self._d.nbytes
+        return self._store.nbytes
 
     def update(self, y: np.ndarray) -> None:
         """Add the next samples (any length)."""
-        y = np.asarray(y, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)
         if self.offset is None and y.size:
             self.offset = _offset(y[:self.chunk])
         _check_inf(y, self.n)
         a = 0
         while a < y.size:  # steps end on multiples of the chunk: ring slots never wrap
             w = min(y.size - a, self.chunk - self.n % self.chunk)
-            self._step(y[a:a + w])
+            octave_step(y[a:a + w], self.offset, self._store, self._base, self._size,
+                        self._ring, self._ms, self.n, self._sums, self._comps, self._nan)
+            self.n += w
             a += w
-
-    def _new_slot(self, k: int, w: int) -> np.ndarray:
-        m, buf = self.ms[k], self._buf[k]
-        if not self._ring[k]:
-            return buf[m:m + w]
-        p = self.n % buf.size
-        return buf[p:p + w]
-
-    def _step(self, y: np.ndarray) -> None:
-        w, j0, K = y.size, self.n, len(self.ms)
-        np.subtract(y, self.offset, out=self._new_slot(0, w))
-        for k, m in enumerate(self.ms):
-            buf = self._buf[k]
-            if self._ring[k]:
-                p = j0 % buf.size
-                new, po = buf[p:p + w], (p - m) % buf.size
-                old = buf[po:po + w]
-            else:
-                old, new = buf[0:w], buf[m:m + w]
-            lo = max(0, 2 * m - 1 - j0)  # D_m(j) exists from j = 2m - 1 on
-            if lo < w:
-                d = self._d[:w - lo]
-                np.subtract(new[lo:], old[lo:], out=d)
-                s, bad = _sumsq(d)
-                self._sums.add(k, s)
-                self._nan[k] += bad
-            if k + 1 < K:
-                np.add(new, old, out=self._new_slot(k + 1, w))
-            if not self._ring[k]:
-                buf[0:m] = buf[w:w + m]  # keep the last m block sums
-        self.n += w
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
         """(sums of squared terms, terms kept) per level; levels without terms get count 0."""
-        ms = np.asarray(self.ms)
-        full = np.maximum(self.n - 2 * ms + 1, 0)
-        return self._sums.total(), (full - self._nan).astype(float)
+        full = np.maximum(self.n - 2 * self._ms + 1, 0)
+        return self._sums + self._comps, (full - self._nan).astype(float)
 
 
 class PhaseAccumulator:
@@ -183,6 +119,7 @@ class PhaseAccumulator:
             raise FogbayesError("cluster sizes must be positive integers", column="taus",
                                 fix="pass cluster sizes m >= 1 (samples)")
         self.ms = tuple(int(m) for m in ms)
+        self._ms = ms
         self.chunk = int(chunk)
         self.keep = 2 * self.ms[-1]  # phase points a term looks back
         # window: kept history + room for several chunks, so compaction (a copy of `keep`
@@ -191,9 +128,9 @@ class PhaseAccumulator:
         self._P = np.zeros(self._cap)
         self._P2 = np.zeros(self._cap)
         self._G: np.ndarray | None = None  # NaN counts, created at the first NaN
-        self._t = np.empty(self.chunk)
         self._end = 1  # window holds phase points [n + 1 - _end, n]; S_0 = 0 is at slot 0
-        self._sums = _Compensated(len(self.ms))
+        self._sums = np.zeros(len(self.ms))
+        self._comps = np.zeros(len(self.ms))
         self._kept = np.zeros(len(self.ms), np.int64)
         self.offset: float | None = None
         self.n = 0
@@ -201,7 +138,7 @@ class PhaseAccumulator:
     @property
     def nbytes(self) -> int:
         g = 0 if self._G is None else self._G.nbytes
-        return self._P.nbytes + self._P2.nbytes + self._t.nbytes + g
+        return self._P.nbytes + self._P2.nbytes + g
 
     def update(self, y: np.ndarray) -> None:
         y = np.asarray(y, dtype=float)
@@ -240,29 +177,13 @@ class PhaseAccumulator:
         seg += self._P[e0 - 1]
         np.multiply(seg, 2.0, out=self._P2[e0:e0 + w])
         self._end = e0 + w
-        first = self.n + 1  # global phase index of slot e0
-        for k, m in enumerate(self.ms):
-            g_lo = max(first, 2 * m)  # terms end at phase index e >= 2m
-            if g_lo > self.n + w:
-                continue
-            a = e0 + (g_lo - first)  # slot of the first term's end
-            cnt = self._end - a
-            t = self._t[:cnt]
-            np.add(self._P[a:self._end], self._P[a - 2 * m:self._end - 2 * m], out=t)
-            np.subtract(t, self._P2[a - m:self._end - m], out=t)
-            if self._G is not None and self._G[self._end - 1] != self._G[a - 2 * m]:
-                ok = self._G[a:self._end] == self._G[a - 2 * m:self._end - 2 * m]
-                t[~ok] = 0.0
-                kept = int(ok.sum())
-            else:
-                kept = cnt
-            s, _ = _sumsq(t)
-            self._sums.add(k, s)
-            self._kept[k] += kept
+        gaps = self._G is not None
+        phase_step(self._P, self._P2, self._G if gaps else _NO_GAPS, gaps, self.n + 1 - e0,
+                   e0, self._end, self._ms, self._sums, self._comps, self._kept)
         self.n += w
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._sums.total(), self._kept.astype(float)
+        return self._sums + self._comps, self._kept.astype(float)
 
 
 def variance(ms, sums: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""In-memory overlapping Allan variance by the streaming accumulators (NumPy, cache-blocked).
+"""In-memory overlapping Allan variance by the streaming accumulators (compiled, cache-blocked).
 
 The same estimator as :func:`fogbayes.stats.allan_kernels.allan_variance` with
 ``kind="oadev"`` (NIST SP 1065 eq. 11; see :mod:`fogbayes.stats.allan_accumulators`), computed by
@@ -9,14 +9,19 @@ walking the record once in cache-sized chunks:
 * any other set: the phase window, three vector operations and a sum of squares per sample
   and tau.
 
-Why NumPy and not XLA: on this project's CPU, XLA copies each shifted slice of the phase
-before the reduction (measured 1.4-9 ns per sample and tau for fused kernels), where NumPy
-ufuncs on chunks that stay in L2/L3 cost 0.5-2 ns; allantools does 5-6 full-size memory
-passes per tau. Differences to ``allan_variance``: no noise identification or intervals
-(this returns variances and term counts only); gaps (NaN) are handled the same way.
+Why not XLA: on this project's CPU, XLA copies each shifted slice of the phase before the
+reduction (measured 1.4-9 ns per sample and tau for fused kernels); the fused compiled loops
+of :mod:`fogbayes.stats.allan_loops` on chunks that stay in L1/L2 cost about 0.25 ns per
+sample and octave; allantools does 5-6 full-size memory passes per tau. A batch runs its
+sensors on threads (one per core). Differences to ``allan_variance``: no noise
+identification or intervals (this returns variances and term counts only); gaps (NaN) are
+handled the same way.
 """
 
 from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -49,8 +54,10 @@ def allan_variance_fast(y, ms, *, chunk: int = DEFAULT_CHUNK) -> tuple[np.ndarra
     Matches ``allan_variance(y, ms, kind="oadev")`` to rounding (about 1e-12 relative).
     """
     y = np.asarray(y, dtype=float)
-    if y.ndim == 2:
-        parts = [allan_variance_fast(row, ms, chunk=chunk) for row in y]
+    if y.ndim == 2:  # sensors on threads: the compiled steps release the GIL
+        workers = max(1, min(len(y), os.cpu_count() or 1))
+        with ThreadPoolExecutor(workers) as pool:
+            parts = list(pool.map(lambda row: allan_variance_fast(row, ms, chunk=chunk), y))
         return np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
     if y.ndim != 1:
         raise FogbayesError(f"rate data must be 1-D (or 2-D for a batch), got shape {y.shape}",
