@@ -48,7 +48,7 @@ from ..errors import FogbayesError, TooShortError
 from ..export import coefficient_document
 from ..inference.compare import rms_criterion
 from ..inference.lsq import lstsq, lstsq_gram
-from ..metrics import DEFAULT_WINDOWS, segment_report
+from ..metrics import DEFAULT_WINDOWS
 from ..models.polynomial import PolyBasis, design
 from ..models.thermal import thermal_basis
 from ..preprocess import pauta_flags
@@ -63,9 +63,10 @@ from ..workflow.thermal import (
     clamp_covariates,
     model_spec,
     parse_orders,
-    thermal_segments,
 )
+from . import prepare
 from .files import FleetError
+from .metrics import segment_reports
 
 SOLVERS = {"gram": lstsq_gram, "qr": lstsq}
 _UNSUPPORTED = ("order_criterion", "noise", "ar_order", "ma_order", "num_warmup",
@@ -115,8 +116,34 @@ def _prepare(rec, spec, proc, mask=None):
     return _reblock(rec, rate, z, spec, proc, mask)
 
 
+def _prepare_all(recs, spec, proc, on_error) -> tuple[list[int], list[tuple]]:
+    """(indices fitted, their (rate, z, blocks, basis)): per clock group in one go
+    (:mod:`.prepare`); when that fails, recording by recording to report each bad one."""
+    try:
+        rates = [r.rate("deg/h") for r in recs]
+        zs = prepare.covariates(recs, spec, proc)
+        blocks = prepare.blocks(recs, rates, zs, spec, proc)
+        return list(range(len(recs))), [_with_basis(r, y, z, b, spec) for r, y, z, b
+                                         in zip(recs, rates, zs, blocks)]
+    except FogbayesError:
+        pass  # some recording cannot be fitted: find it (and any other) one by one
+    keep, prep = [], []
+    for i, rec in enumerate(recs):
+        try:
+            prep.append(_prepare(rec, spec, proc))
+            keep.append(i)
+        except FogbayesError as exc:
+            if on_error is None:
+                raise
+            on_error(i, exc)
+    return keep, prep
+
+
 def _reblock(rec, rate, z, spec, proc, mask):
-    blocks = fit_blocks(rec, rate, z, spec, proc, mask)
+    return _with_basis(rec, rate, z, fit_blocks(rec, rate, z, spec, proc, mask), spec)
+
+
+def _with_basis(rec, rate, z, blocks, spec):
     basis = thermal_basis(spec, blocks.z)
     if blocks.y.size < basis.n_terms + 2:  # the workflow's own limit (workflow.thermal._lsq)
         raise TooShortError(f"{blocks.y.size} block means cannot fit {basis.n_terms} "
@@ -188,15 +215,7 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     t_order, r_order = parse_orders(model, orders)[0]
     spec = model_spec(model, t_order, r_order, options)
-    keep, prep = [], []
-    for i, rec in enumerate(recs):
-        try:
-            prep.append(_prepare(rec, spec, proc))
-            keep.append(i)
-        except FogbayesError as exc:
-            if on_error is None:
-                raise
-            on_error(i, exc)
+    keep, prep = _prepare_all(recs, spec, proc, on_error)
     out: list[dict | None] = [None] * len(recs)
     if not keep:
         return out
@@ -209,9 +228,11 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
         flags = [pauta_flags(y - b, n_sigma=proc.n_sigma) for y, b in zip(rates, bias)]
         redo = [s for s, f in enumerate(flags) if f.count]
         if redo:  # refit the flagged sensors on block means without their flagged samples
-            for s in redo:  # too few blocks left raises here, as the workflow's refit does
-                _, _, blocks[s], bases[s] = _reblock(good[s], rates[s], zs[s], spec, proc,
-                                                     flags[s].mask)
+            sub = [good[s] for s in redo]
+            new = prepare.blocks(sub, [rates[s] for s in redo], [zs[s] for s in redo], spec,
+                                 proc, [flags[s].mask for s in redo])
+            for s, b in zip(redo, new):  # too few blocks left raises, as the workflow's refit
+                _, _, blocks[s], bases[s] = _with_basis(good[s], rates[s], zs[s], b, spec)
             for s, fit in zip(redo, _solve([blocks[s] for s in redo], [bases[s] for s in redo],
                                            solver)):
                 fits[s] = fit
@@ -219,13 +240,15 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
               zip(bs.names, bl.z.min(axis=0), bl.z.max(axis=0))} for bs, bl in zip(bases, blocks)]
     # compensated output for the metrics, covariates clamped as compensation clamps them
     clamped = [clamp_covariates(z, bs, v) for z, bs, v in zip(zs, bases, valid)]
-    after = [y - b for y, b in zip(rates, _bias(fits, clamped, bases))]
+    rates_arr = np.stack(rates)
+    after = rates_arr - _bias(fits, clamped, bases)
+    metrics = segment_reports(rates_arr, after, [r.time for r in good],
+                              prepare.segments(good, zs), windows=windows)
     for s, rec in enumerate(good):
         coef, cov, resid, s2, dof, ok = fits[s]
-        out[keep[s]] = _document(rec, model, spec, proc, windows, bases[s], blocks[s], zs[s],
-                                 rates[s], after[s], valid[s], coef, cov,
-                                 resid[:blocks[s].y.size], s2, dof, bool(ok), flags[s],
-                                 fogbayes.__version__)
+        out[keep[s]] = _document(rec, model, spec, proc, bases[s], blocks[s], valid[s], coef,
+                                 cov, resid[:blocks[s].y.size], s2, dof, bool(ok), flags[s],
+                                 metrics[s], fogbayes.__version__)
     return out
 
 
@@ -236,8 +259,8 @@ def _bias(fits, zs, bases) -> np.ndarray:
         jnp.asarray([b.centre for b in bases]), jnp.asarray([b.scale for b in bases])))
 
 
-def _document(rec, model, spec, proc, windows, basis, blocks, z, rate, after, valid, coef,
-              cov, resid, s2, dof, ok, flags, version) -> dict:
+def _document(rec, model, spec, proc, basis, blocks, valid, coef, cov, resid, s2, dof, ok,
+              flags, metrics, version) -> dict:
     """The fields of ``fit_recording``'s document (same keys, same order), from this solve."""
     warnings = [] if ok else [(
         "the design is rank deficient: some covariate does not vary enough (e.g. dT/dt in a "
@@ -257,7 +280,6 @@ def _document(rec, model, spec, proc, windows, basis, blocks, z, rate, after, va
                 "residual_std": float(np.sqrt(s2)), "dof": int(dof),
                 "stderr_note": "least-squares standard errors assume white block means; "
                                "see 'bayes' for intervals with AR noise"},
-        "metrics": segment_report(rate, after, rec.time, thermal_segments(rec, z),
-                                  windows=windows),
+        "metrics": metrics,
         "vectorized": True,
     }

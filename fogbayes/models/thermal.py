@@ -125,13 +125,14 @@ def thermal_covariates(time: np.ndarray, temperatures: np.ndarray,
                        temperature_names: Sequence[str], spec: ThermalSpec, *,
                        rate_method: str = "savgol", rate_window_s: float = 10.0,
                        rate_gap_factor: float | None = None,
-                       source: str | None = None) -> np.ndarray:
+                       source: str | None = None, rate: np.ndarray | None = None) -> np.ndarray:
     """Covariates ``z`` (n, c) in the order of :func:`covariate_names`, one row per sample.
 
     ``rate_gap_factor``: a time step longer than this many median steps is a gap that the
     temperature-rate estimator does not bridge (default: the preprocessing default). Pass a
     large value for burst records (e.g. 5 s every 5 min), whose rate must come from
-    differences across bursts.
+    differences across bursts. ``rate``: dT/dt (deg C/min) per sample when already computed
+    (a fleet computes all its sensors' rates in one call), else it is computed here.
     """
     temps = np.asarray(temperatures, dtype=float).reshape(len(time), -1)
     names = list(temperature_names)
@@ -153,7 +154,8 @@ def thermal_covariates(time: np.ndarray, temperatures: np.ndarray,
     cols = [T]
     if spec.rate_order > 0:
         cols.append(temperature_rate_of(time, T, method=rate_method, window_s=rate_window_s,
-                                        gap_factor=rate_gap_factor))
+                                        gap_factor=rate_gap_factor) if rate is None
+                    else np.asarray(rate, dtype=float))
     cols += [channel(nm) for nm in spec.extra]
     if spec.gradient:
         cols.append(channel(spec.gradient[0]) - channel(spec.gradient[1]))

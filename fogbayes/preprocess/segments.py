@@ -97,19 +97,37 @@ def segment_thermal(time, temperature, *, rate_threshold: float = 0.1 / 60.0,
     Returns:
         Segments in time order, covering every sample once.
     """
-    t = check_time(time)
     T = as_1d(temperature, "temperature")
-    same_length(time=t, temperature=T)
+    return segment_thermal_rows(time, T[None, :], rate_threshold=rate_threshold,
+                                min_duration=min_duration, smooth_s=smooth_s,
+                                gap_factor=gap_factor)[0]
+
+
+def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60.0,
+                         min_duration: float = 300.0, smooth_s: float = 60.0,
+                         gap_factor: float = GAP_FACTOR) -> list[list[Segment]]:
+    """:func:`segment_thermal` of several sensors sampled at ``time``: (sensors, n) deg C.
+
+    The smoothed rates of all sensors come from one filter call; labels and merging are
+    per sensor.
+    """
+    t = check_time(time)
+    T = np.asarray(temperatures, dtype=float)
+    if T.ndim != 2:
+        raise FogbayesError(f"temperatures must be (sensors, n), got shape {T.shape}",
+                            column="temperature", fix="pass one row per sensor")
+    same_length(time=t, temperature=T[0])
     if not np.isfinite(rate_threshold) or rate_threshold <= 0:
         raise FogbayesError(f"rate_threshold must be positive, got {rate_threshold!r}",
                             column="rate_threshold",
                             fix="pass e.g. rate_threshold=0.1/60 (deg C/s)")
     check_window(smooth_s, t, name="smooth_s")
-    r = temperature_rate(t, T, method="savgol", window_s=smooth_s, polyorder=1,
-                         gap_factor=gap_factor)
-    labels = np.where(r > rate_threshold, 1, np.where(r < -rate_threshold, -1, 0))
+    rates = temperature_rate(t, T, method="savgol", window_s=smooth_s, polyorder=1,
+                             gap_factor=gap_factor)
     out = []
-    for lab, a, b in merge_short_runs(labels, t, float(min_duration)):
-        out.append(Segment(_KINDS[lab], a, b, float(t[a]), float(t[b - 1]), float(T[a:b].mean()),
-                           ls_slope(t[a:b], T[a:b])))
+    for Ts, r in zip(T, rates):
+        labels = np.where(r > rate_threshold, 1, np.where(r < -rate_threshold, -1, 0))
+        out.append([Segment(_KINDS[lab], a, b, float(t[a]), float(t[b - 1]),
+                            float(Ts[a:b].mean()), ls_slope(t[a:b], Ts[a:b]))
+                    for lab, a, b in merge_short_runs(labels, t, float(min_duration))])
     return out
