@@ -15,12 +15,15 @@ filter), which are the terms handed to ``az.waic`` / ``az.loo``. For a time seri
 scores one-step-ahead prediction given the past rather than leave-one-out in the i.i.d.
 sense; it ranks orders like the exact likelihood does.
 
-Orders are compared inside one padded shape (P, Q) with 0/1 masks, so NumPyro compiles the
-sampler once (``jit_model_args=True``) for the whole candidate set.
+Orders are compared inside one padded shape (P, Q) with 0/1 masks; the masks, the series
+and the prior scale are traced arguments of one cached, jitted sampler (:func:`_sampler`),
+so it compiles once per (warm-up, draws, n, P, Q, chains) for the whole candidate set and
+for every later call of the same shapes.
 """
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import NamedTuple
 
 import jax
@@ -62,14 +65,27 @@ def arma_model(x, mask_phi, mask_theta, sigma_scale):
     numpyro.factor("loglik", arma_loglik(phi, theta, sigma * sigma, x))
 
 
+#: times the sampler / the pointwise log-likelihood were traced (a Python side effect runs
+#: only while JAX traces): a warm call of the same configuration and shapes leaves it as is
+TRACES = {"sampler": 0, "pointwise": 0}
+
+
+def _one_step_terms(a, b, s2, x):
+    """log N(x_t; x^_{t|t-1}, s2 F~_t), t = 1..n, at one draw (Kalman filter)."""
+    TRACES["pointwise"] += 1
+    f = kalman_filter(arma_state_space(a, b, s2), x)
+    return -0.5 * (jnp.log(2 * jnp.pi * f.innov_var) + f.innov ** 2 / f.innov_var)
+
+
+# module level, x an argument (not a closure): compiled once per shape, and a closed-over
+# series would become an XLA constant, folded at every compilation
+_pointwise = jax.jit(jax.vmap(_one_step_terms, in_axes=(0, 0, 0, None)))
+
+
 def pointwise_loglik(phi, theta, sigma2, x) -> jax.Array:
     """log N(x_t; x^_{t|t-1}, sigma2 F~_t) for each draw: phi (S, P), theta (S, Q) -> (S, n)."""
-
-    def one(a, b, s2):
-        f = kalman_filter(arma_state_space(a, b, s2), x)
-        return -0.5 * (jnp.log(2 * jnp.pi * f.innov_var) + f.innov ** 2 / f.innov_var)
-
-    return jax.jit(jax.vmap(one))(phi, theta, sigma2)
+    return _pointwise(jnp.asarray(phi, dtype=float), jnp.asarray(theta, dtype=float),
+                      jnp.asarray(sigma2, dtype=float), jnp.asarray(x, dtype=float))
 
 
 def _masks(p, q, P, Q):
@@ -77,27 +93,68 @@ def _masks(p, q, P, Q):
             jnp.array([1.0 if j < q else 0.0 for j in range(Q)]))
 
 
-def _mcmc(num_warmup, num_samples, num_chains):
-    from numpyro.infer import MCMC, NUTS
+@lru_cache(maxsize=8)
+def _sampler(num_warmup: int, num_samples: int):
+    """Initialisation, warm-up and sampling of all chains as one jitted function.
 
-    return MCMC(NUTS(arma_model), num_warmup=num_warmup, num_samples=num_samples,
-                num_chains=num_chains, chain_method="vectorized", progress_bar=False,
-                jit_model_args=True)
+    ``MCMC(NUTS(arma_model))`` built per call re-traced and re-compiled the sampler every
+    time (~5 s a call; its own jit cache lives on the MCMC object). Here NumPyro's
+    functional API runs the same steps as ``MCMC.run`` with ``chain_method="vectorized"``:
+    per chain key (key, init key) = split(key); ``initialize_model`` (init_to_uniform,
+    up to 100 tries for a finite potential and gradient); ``hmc(algo="NUTS")``'s
+    ``init_kernel`` with NumPyro's defaults (diagonal mass, target acceptance 0.8, tree
+    depth 10, step size and mass adaptation during warm-up); ``sample_kernel`` for
+    warm-up + draws, keeping the draws; ``postprocess_fn`` for the constrained values and
+    the deterministic sites. Inside a jit, ``initialize_model`` skips its eager checks.
+
+    The factory is cached per (num_warmup, num_samples) (they fix the scan length and the
+    adaptation schedule); x, the masks and sigma_scale are traced arguments, so another
+    series or another order inside the same padded (P, Q) reuses the compiled function
+    (JAX's jit cache, keyed by shapes: n, P, Q, chains). Returns constrained draws
+    {site: (chains, num_samples, ...)} and the divergence flags (chains, num_samples).
+    """
+    from numpyro.infer.hmc import hmc
+    from numpyro.infer.util import initialize_model
+
+    def run(keys, x, mask_phi, mask_theta, sigma_scale):
+        TRACES["sampler"] += 1
+        args = (x, mask_phi, mask_theta, sigma_scale)
+        keys, k_init = jnp.swapaxes(jax.vmap(jax.random.split)(keys), 0, 1)
+        info = initialize_model(k_init, arma_model, model_args=args, dynamic_args=True)
+        init_kernel, sample_kernel = hmc(potential_fn_gen=info.potential_fn, algo="NUTS")
+        # dense_mass=[]: what NUTS(model) passes for dense_mass=False (a diagonal mass per
+        # site rather than one over the raveled vector; the same draws as MCMC for a seed)
+        state = jax.vmap(lambda z, k: init_kernel(z, num_warmup, dense_mass=[], model_args=args,
+                                                  rng_key=k))(info.param_info, keys)
+
+        def step(st, _):
+            st = jax.vmap(lambda s: sample_kernel(s, model_args=args))(st)
+            return st, (st.z, st.diverging)
+
+        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
+        zs = jax.tree.map(lambda v: jnp.swapaxes(v[num_warmup:], 0, 1), zs)  # (C, D, ...)
+        post = jax.vmap(jax.vmap(info.postprocess_fn(*args)))(zs)
+        return post, div[num_warmup:].T
+
+    return jax.jit(run)
 
 
-def _run(mcmc, x, p, q, P, Q, seed: int) -> ArmaPosterior:
+def _run(x, p, q, P, Q, seed: int, num_warmup: int, num_samples: int,
+         num_chains: int) -> ArmaPosterior:
     import arviz as az
 
     mp, mq = _masks(p, q, P, Q)
-    mcmc.run(jax.random.PRNGKey(seed), x, mp, mq, 2.0 * jnp.std(x))
-    s = mcmc.get_samples(group_by_chain=True)
+    # as MCMC.run: one key per chain split from PRNGKey(seed) (a single chain: the key itself)
+    key = jax.random.PRNGKey(seed)
+    keys = jax.random.split(key, num_chains) if num_chains > 1 else key[None]
+    s, div = _sampler(int(num_warmup), int(num_samples))(keys, x, mp, mq, 2.0 * jnp.std(x))
     C, D = s["sigma"].shape
     ll = pointwise_loglik(s["phi"].reshape(C * D, P), s["theta"].reshape(C * D, Q),
                           s["sigma2"].reshape(C * D), x)
     post = {k: np.asarray(s[k]) for k in ("phi", "theta", "sigma2")}
     post.update({f"pacf_{k}": np.asarray(s[f"pacf_{k}"]) for k in ("phi", "theta")
                  if f"pacf_{k}" in s})
-    div = np.asarray(mcmc.get_extra_fields(group_by_chain=True)["diverging"])
+    div = np.asarray(div)
     idata = az.from_dict(posterior=post, log_likelihood={"x": np.asarray(ll).reshape(C, D, -1)},
                          sample_stats={"diverging": div})
     free = [f"pacf_phi[{i}]" for i in range(p)] + [f"pacf_theta[{j}]" for j in range(q)]
@@ -120,7 +177,7 @@ def arma_posterior(x, *, p: int, q: int, seed: int, num_warmup: int = 500,
     (Vehtari et al. 2021); a fit that fails this is returned with ``converged=False``.
     """
     x = jnp.asarray(x, dtype=float)
-    return _run(_mcmc(num_warmup, num_samples, num_chains), x, p, q, p, q, seed)
+    return _run(x, p, q, p, q, seed, num_warmup, num_samples, num_chains)
 
 
 class BayesComparison(NamedTuple):
@@ -143,10 +200,9 @@ def compare_orders_bayes(x, candidates, *, seed: int, num_warmup: int = 500,
     orders = tuple((int(p), int(q)) for p, q in candidates)
     P, Q = max(p for p, _ in orders), max(q for _, q in orders)
     x = jnp.asarray(x, dtype=float)
-    mcmc = _mcmc(num_warmup, num_samples, num_chains)  # one compilation for all orders
     posts, rows = [], []
     for i, (p, q) in enumerate(orders):
-        post = _run(mcmc, x, p, q, P, Q, seed + i)
+        post = _run(x, p, q, P, Q, seed + i, num_warmup, num_samples, num_chains)
         w, lo = az.waic(post.idata), az.loo(post.idata, pointwise=True)
         posts.append(post)
         rows.append((w.elpd_waic, w.se, lo.elpd_loo, lo.se, float(np.max(lo.pareto_k))))
