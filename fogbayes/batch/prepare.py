@@ -93,7 +93,7 @@ def blocks(recs, rates, zs, spec, proc, masks=None) -> list[Blocks]:
         tm, means, cnt = _masked_block_means(t, cols, use, bi.start, bi.stop)
         for j, i in enumerate(group):
             keep = cnt[j] > 0
-            out[i] = Blocks(tm[j, keep], means[j, 0, keep], means[j][1:, keep].T.copy(),
+            out[i] = Blocks(tm[j, keep], means[j, 0, keep], means[j][1:, keep].T,
                             cnt[j, keep])
     return out
 
@@ -112,6 +112,11 @@ def _masked_block_means(t, x, use, start, stop):
                                       - np.repeat(np.cumsum(length) - length, length))
     rel = np.zeros(n)
     rel[pos] = t[pos] - np.repeat(t[start], length)
+    if use.all():  # nothing left out: plain block means
+        sums = block_sums(x.reshape(S * k, n), start, stop).reshape(S, k, -1)
+        tm = t[start] + block_means(rel[None, :], start, stop)[0]
+        cnt = np.broadcast_to(length, (S, length.size))
+        return np.broadcast_to(tm, (S, tm.size)), sums / length, cnt
     w = use.astype(float)
     cnt = np.rint(block_sums(w, start, stop)).astype(np.int64)
     with np.errstate(invalid="ignore", divide="ignore"):

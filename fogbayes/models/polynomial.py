@@ -28,6 +28,8 @@ Example:
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 from collections.abc import Sequence
 from math import comb
 from typing import NamedTuple
@@ -68,6 +70,11 @@ def term_label(names: Sequence[str], exponents: Sequence[int]) -> str:
 
 def is_downward_closed(terms: Sequence[tuple[int, ...]]) -> bool:
     """True when every monomial's divisors are in the set too (needed for :func:`to_raw`)."""
+    return _downward_closed(tuple(tuple(int(x) for x in e) for e in terms))
+
+
+@lru_cache(maxsize=256)  # a fleet asks for the same term set once per sensor
+def _downward_closed(terms: tuple[tuple[int, ...], ...]) -> bool:
     have = set(terms)
     for e in terms:
         for c, ec in enumerate(e):
@@ -92,7 +99,7 @@ def make_basis(names: Sequence[str], terms: Sequence[tuple[int, ...]], z: np.nda
         raise ShapeError(f"{len(names)} covariate names, {z.shape[1]} covariate columns and "
                          f"terms of lengths {sorted({len(e) for e in terms})} do not match",
                          fix="give one name and one exponent per covariate column")
-    if not is_downward_closed(terms):
+    if not _downward_closed(terms):
         raise ShapeError(f"the term set {terms} is not downward closed",
                          fix="include every lower-order monomial (e.g. T when T^2 is used)")
     lo, hi = z.min(axis=0), z.max(axis=0)
