@@ -93,8 +93,11 @@ def blocks(recs, rates, zs, spec, proc, masks=None) -> list[Blocks]:
         tm, means, cnt = _masked_block_means(t, cols, use, bi.start, bi.stop)
         for j, i in enumerate(group):
             keep = cnt[j] > 0
-            out[i] = Blocks(tm[j, keep], means[j, 0, keep], means[j][1:, keep].T,
-                            cnt[j, keep])
+            if keep.all():
+                out[i] = Blocks(tm[j], means[j, 0], means[j][1:].T, cnt[j])
+            else:  # z as (blocks, c) in column order: per-column min/max stay contiguous
+                out[i] = Blocks(tm[j, keep], means[j, 0, keep],
+                                np.ascontiguousarray(means[j][1:, keep]).T, cnt[j, keep])
     return out
 
 
