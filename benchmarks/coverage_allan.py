@@ -60,6 +60,14 @@ def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
             fit = fit_wls(data, PARAMS if method == "wls4" else ab.TERMS)
         elif method in ("bayes", "bayes4"):
             fit = ab.fit_bayes(data, PARAMS if method == "bayes4" else ab.TERMS, seed=seed).fit
+        elif method == "ssm":  # K only: the time-domain likelihood study (k_timedomain.py)
+            from k_timedomain import fit_walk
+
+            e = fit_walk(y, fs)
+            out[method] = {"K": [e.value, e.low, e.high]}
+            out[method + "_converged"] = e.converged
+            out[method + "_seconds"] = time.perf_counter() - t0
+            continue
         elif method == "select":
             sel = ab.select_terms(data, seed=seed)
             rep = ab.reported_terms(sel)
@@ -91,6 +99,10 @@ def table(rows: list[dict], methods) -> str:
         for m in methods:
             cov, rms = [], []
             for p in PARAMS:
+                if p not in sel[0][m]:  # a method that estimates some terms only
+                    cov.append("-")
+                    rms.append("-")
+                    continue
                 inside = [r[m][p][1] <= truth[p] <= r[m][p][2] for r in sel]
                 cov.append(f"{np.mean(inside):.0%} ({len(inside)})")
                 fe = np.array([r[m][p][0] / truth[p] - 1 for r in sel])
