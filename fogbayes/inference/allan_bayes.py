@@ -134,10 +134,15 @@ class AllanPosterior(NamedTuple):
     data: AllanFitData
 
 
-def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 400,
-              num_samples: int = 600, num_chains: int = 2,
+def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 1000,
+              num_samples: int = 2000, num_chains: int = 2,
               discrepancy: str | bool = "auto") -> AllanPosterior:
-    """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring."""
+    """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring.
+
+    Default sizes: with 400 warm-up / 600 draws only 25-55 % of five-term fits met R-hat <
+    1.01 and ESS > 200 (the K-R ridge mixes slowly); 1000 / 2000 gave 95-100 % for ~35 %
+    more time (20 seeds each of two mixes, benchmarks/RESULTS_allan.md section 3).
+    """
     mask = _mask(terms)
     wls = fit_wls(data, terms)
     post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains,
