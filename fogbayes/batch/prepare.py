@@ -8,14 +8,14 @@ the whole group:
 
 * dT/dt: one 2-D filter call (:func:`fogbayes.preprocess.temperature_rate` accepts
   (sensors, n) temperatures);
-* block means (``average_s`` blocks, no sample left out yet): the block layout is built once
-  (:func:`fogbayes.preprocess.blocks.block_index`) and every column of every sensor is
-  summed by one ``numpy.add.reduceat``;
+* block means (``average_s`` blocks, with or without Pauta-flagged samples left out): the
+  block layout is built once (:func:`fogbayes.preprocess.blocks.block_index`) and every
+  column of every sensor is summed by one reduction (:func:`.metrics.block_sums`);
 * segments: :func:`fogbayes.preprocess.segments.segment_thermal_rows` (one filter call).
 
 The results equal the per-recording functions' to rounding (sums in another order). Paper
-mode (1 s / 10 s smoothing with held differences), masks and anything else the fast path
-does not cover fall back to the per-recording functions, recording by recording.
+mode (1 s / 10 s smoothing with held differences) and recordings alone on their clock go
+through the per-recording functions.
 """
 
 from __future__ import annotations

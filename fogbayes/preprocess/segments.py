@@ -113,9 +113,10 @@ def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60
     """
     t = check_time(time)
     T = np.asarray(temperatures, dtype=float)
-    if T.ndim != 2:
-        raise FogbayesError(f"temperatures must be (sensors, n), got shape {T.shape}",
-                            column="temperature", fix="pass one row per sensor")
+    if T.ndim != 2 or T.shape[0] == 0:
+        raise FogbayesError(f"temperatures must be (sensors, n) with a sensor or more, got "
+                            f"shape {T.shape}", column="temperature",
+                            fix="pass one row per sensor")
     same_length(time=t, temperature=T[0])
     if not np.isfinite(rate_threshold) or rate_threshold <= 0:
         raise FogbayesError(f"rate_threshold must be positive, got {rate_threshold!r}",
