@@ -11,7 +11,8 @@ What makes it fast is that a lab samples its gyros with one clock and soaks them
 chamber: many sensors share a time vector and the same segment bounds. The block layout of
 a (time vector, segment, window) is built once (:func:`fogbayes.preprocess.blocks.block_index`,
 the same function the single-sensor path uses) and every sensor that shares it gets its
-block sums from one ``numpy.add.reduceat`` over a (sensors, samples) array. Sensors with a
+block sums from one reduction over a (sensors, samples) array (:func:`block_sums`: a reshape
+on a regular grid, ``numpy.add.reduceat`` otherwise). Sensors with a
 clock or segments of their own still work; they share less. Numbers equal the single-sensor
 path to rounding (block sums in a different order: ~1e-15 relative).
 """
@@ -72,11 +73,11 @@ def _report(before: np.ndarray, after: np.ndarray, t: np.ndarray, tkey, a: int, 
         lay = layouts.get(tkey, t, a, b, float(w))
         if lay is None:
             continue
-        bs = np.std(block_means(x, *lay), axis=1, ddof=1)
-        before, after = bs[:k].tolist(), bs[k:].tolist()  # Python floats in one call
+        bs = np.std(block_means(x, *lay), axis=1, ddof=1).tolist()  # Python floats at once
         for s in range(k):
-            rows[s].append({"window_s": float(w), "before": before[s], "after": after[s],
-                            "improvement_pct": improvement_pct(before[s], after[s])})
+            bs_b, bs_a = bs[s], bs[k + s]
+            rows[s].append({"window_s": float(w), "before": bs_b, "after": bs_a,
+                            "improvement_pct": improvement_pct(bs_b, bs_a)})
     duration = float(t[b - 1] - t[a])
     b0 = b0.tolist()
     return [{"bias_before": b0[s], "bias_after": b0[k + s],
