@@ -81,8 +81,8 @@ def run_case(case: dict) -> dict:
 CLEAN_SEEDS = {"bias-t": 15, "composite": 6}
 
 
-def cases(quick: bool, effects: tuple[str, ...] | None = None) -> list[dict]:
-    seeds = (0, 1) if quick else (0, 1, 2)
+def cases(quick: bool, effects: tuple[str, ...] | None = None, first_seed: int = 0) -> list[dict]:
+    seeds = tuple(first_seed + k for k in ((0, 1) if quick else (0, 1, 2)))
     grid = []
 
     def want(eff):
@@ -94,14 +94,16 @@ def cases(quick: bool, effects: tuple[str, ...] | None = None) -> list[dict]:
         for mag, noise, fs, dur, prof in CONFIGS:
             if quick and noise in ("walk", "white"):
                 continue
-            for sd in (range(CLEAN_SEEDS["bias-t"]) if eff is None and not quick else seeds):
+            for sd in (range(first_seed, first_seed + CLEAN_SEEDS["bias-t"]) if eff is None
+                       and not quick else seeds):
                 grid.append(dict(effect=eff, model="bias-t", profile=prof, magnitude=mag,
                                  noise=noise, fs=fs, duration=float(dur), seed=sd))
     for eff in RATE_TABLE + (None,):
         if not want(eff):
             continue
         for mag, noise, fs in [(1.0, "default", 10.0), (0.1, "flicker", 2.0)]:
-            for sd in (range(CLEAN_SEEDS["composite"]) if eff is None and not quick else seeds):
+            for sd in (range(first_seed, first_seed + CLEAN_SEEDS["composite"]) if eff is None
+                       and not quick else seeds):
                 grid.append(dict(effect=eff, model="composite", profile="ratetable",
                                  magnitude=mag, noise=noise, fs=fs, duration=2 * 3600.0, seed=sd))
     return grid
@@ -156,7 +158,8 @@ def summarise(rows: list[dict]) -> str:
 
 
 def study(args) -> None:
-    todo = cases(args.quick, tuple(args.effects.split(",")) if args.effects else None)
+    todo = cases(args.quick, tuple(args.effects.split(",")) if args.effects else None,
+                 args.first_seed)
     done = []
     if os.path.exists(args.out):
         done = json.load(open(args.out))
@@ -325,6 +328,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=6)
     ap.add_argument("--effects", default=None, help="comma-separated effect names (None = clean)")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="study: seeds from here (fresh seeds test the method on unseen records)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "loop_study.json"))
     args = ap.parse_args()
