@@ -75,6 +75,9 @@ class Screened(NamedTuple):
     log_p_min: float       # log of the smallest chi^2 p over the grid
     m_eff: float           # effective number of independent tests (from simulations)
     log_p: float           # calibrated log p-value
+    #: calibrated log p under the *fitted* noise model alone, when ``log_p`` is the better of
+    #: two looks (:func:`fogbayes.loop.core._screen_all`); None: ``log_p`` is that one
+    gate_log_p: float | None = None
 
 
 def whiten_columns(ctx: Context, spec, theta, Y: np.ndarray) -> np.ndarray:

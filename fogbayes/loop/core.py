@@ -49,7 +49,9 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "ones leave too little slow noise in the null series); and (2) its PSIS-LOO elpd "
         "(one-step-ahead predictive densities of the block means) exceeds the model "
         "without it; a linear candidate must also reach family-wise p < 0.1 in the "
-        "fixed-noise screening (the refitted ratio also gains from re-estimating the noise); "
+        "fixed-noise screening under the fitted noise model (the refitted ratio also gains "
+        "from re-estimating the noise; a second screening without a random walk, made when "
+        "the fit is in the walk mode, only shortlists candidates); "
         "markov_noise (a noise component) takes chi^2_2 for its refitted ratio (its measured "
         "null). Supported candidates are ranked by the calibrated p-value of the refit, then "
         "the best meets every other supported linear candidate in a duel: D = 2 logL(other) - "
@@ -145,7 +147,11 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
     that a flicker-dominated noise model would leave in the residual. When the current
     fit sits in the random-walk mode, every candidate is also screened against the best
     noise model without a random walk, keeping the smaller p (with a factor 2 for the
-    two looks), so the shortlist does not lose an effect the walk has swallowed.
+    two looks), so the shortlist does not lose an effect the walk has swallowed. That
+    second look is not calibrated when the record's noise really has a walk (any slow
+    term then looks significant: family-wise p down to 1e-15 on clean records), so the
+    screening gate of :func:`fogbayes.loop.ranking.supported_trials` reads the first
+    look's p (``Screened.gate_log_p``), the one under the noise model the data chose.
 
     The screening whitens and simulates under the REML noise hyperparameters of the
     current design (:mod:`fogbayes.diagnose.reml`): ML ones leave too little slow noise
@@ -162,13 +168,14 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
         wm2, screened2 = ev.screen(ctx, with_reml(ctx, fit._replace(noise=nf), cache), cands,
                                    n_sims=opts.n_sims, seed=seed + 1)
         for s2 in screened2:
-            s2 = s2._replace(log_p=s2.log_p + math.log(2.0))
             have = pairs.get(s2.candidate.effect)
+            gate = 0.0 if have is None else have[0].log_p  # not screenable under the fit: p 1
+            s2 = s2._replace(log_p=s2.log_p + math.log(2.0), gate_log_p=gate)
             if have is None or s2.log_p < have[0].log_p + math.log(2.0):
                 pairs[s2.candidate.effect] = (s2, wm2)
             else:
-                pairs[s2.candidate.effect] = (have[0]._replace(log_p=have[0].log_p + math.log(2.0)),
-                                              have[1])
+                pairs[s2.candidate.effect] = (have[0]._replace(
+                    log_p=have[0].log_p + math.log(2.0), gate_log_p=gate), have[1])
     if any(c.kind == "noise" for c in cands):
         sm = screen_markov(ctx, fit, wm)
         if sm is not None:
