@@ -21,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..diagnose import elpd as el
+from ..diagnose.bartlett import bartlett_factor, in_walk_mode, leaves_walk_mode
 from ..diagnose import evidence as ev
 from ..diagnose.candidates import candidates_for
 from ..diagnose.context import Context, make_context
@@ -51,7 +52,10 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "without it; a linear candidate must also reach family-wise p < 0.1 in the "
         "fixed-noise screening under the fitted noise model (the refitted ratio also gains "
         "from re-estimating the noise; a second screening without a random walk, made when "
-        "the fit is in the walk mode, only shortlists candidates); "
+        "the fit is in the walk mode, shortlists candidates, and gates one only if its refit "
+        "drops the walk, in which case its ratio is divided by a bootstrap Bartlett factor "
+        "(mean refitted ratio / dof over 20 series simulated from the current fit), the walk "
+        "variance piling up at zero when a slow term is offered); "
         "markov_noise (a noise component) takes chi^2_2 for its refitted ratio (its measured "
         "null). Supported candidates are ranked by the calibrated p-value of the refit, then "
         "the best meets every other supported linear candidate in a duel: D = 2 logL(other) - "
@@ -61,10 +65,6 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "one not rejected wins; if neither is rejected they are indistinguishable, the one "
         "with fewer searched parameters is kept and the other listed in 'alternatives'; "
         "if both are, the higher likelihood. alpha = 0.01 by default.")
-
-
-#: log(random-walk / white variance ratio) above which the fit counts as in the walk mode.
-RW_MODE = -12.0
 
 
 class Options(NamedTuple):
@@ -90,10 +90,19 @@ class Trial(NamedTuple):
     lr: float
     log_p: float
     log_p_fw: float
+    bartlett: float = 1.0  # scale of the ratio's null (> 1 where the refit dropped the walk)
 
 
-def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand: int) -> Trial:
-    """Refit the model with candidate ``s`` added; its calibrated likelihood-ratio p-value."""
+def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand: int, *,
+           alpha: float = ev.ALPHA, seed: int = 0) -> Trial:
+    """Refit the model with candidate ``s`` added; its calibrated likelihood-ratio p-value.
+
+    Where the refit drops the random walk of the current fit, the ratio is divided by its
+    bootstrap Bartlett factor (:mod:`fogbayes.diagnose.bartlett`; measured only when the
+    ratio would pass ``alpha`` without it), and the screening without a walk becomes the
+    candidate's gate (``gate_log_p`` cleared): the refit itself chose that noise model.
+    """
+    c = 1.0
     if s.candidate.kind == "noise":
         alt = refit_markov(ctx, fit, s)
         lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
@@ -103,13 +112,18 @@ def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand:
         alt = fit_terms(ctx, fit.terms + (term,), spec=fit.noise.spec, theta0=fit.noise.theta)
         lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
         lp = ev.calibrated_log_p(ev.log_chi2_sf(lr, s.dof), s.m_eff)
-    return Trial(s, alt, lr, lp, ev.fw_log_p(lp, n_cand))
+        if leaves_walk_mode(fit, alt):
+            if ev.fw_log_p(lp, n_cand) < math.log(alpha):
+                c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed)
+                lp = ev.calibrated_log_p(ev.log_chi2_sf(lr / c, s.dof), s.m_eff)
+            s = s._replace(gate_log_p=None)
+    return Trial(s, alt, lr, lp, ev.fw_log_p(lp, n_cand), c)
 
 
-def _safe_trial(ctx, fit, wm, s, n_cand) -> Trial | None:
+def _safe_trial(ctx, fit, wm, s, n_cand, **kw) -> Trial | None:
     """A refit that fails numerically (e.g. a column collinear with the model) is no evidence."""
     try:
-        tr = _trial(ctx, fit, wm, s, n_cand)
+        tr = _trial(ctx, fit, wm, s, n_cand, **kw)
     except (np.linalg.LinAlgError, FloatingPointError, ValueError):
         return None
     return tr if math.isfinite(tr.log_p) else None
@@ -125,7 +139,8 @@ def _ranking(screened: list[ev.Screened], n_cand: int) -> list[dict]:
 def _evidence(tr: Trial, d: el.ElpdDiff | None, opts: Options, n_cand: int, trials, ranking):
     noise = tr.screened.candidate.kind == "noise"  # chi^2_2, no grid calibration
     return {"rule": RULE, "alpha": opts.alpha, "n_candidates": n_cand,
-            "likelihood_ratio": tr.lr, "dof": 2 if noise else tr.screened.dof,
+            "likelihood_ratio": tr.lr, "bartlett_factor": tr.bartlett,
+            "dof": 2 if noise else tr.screened.dof,
             "m_eff": 1.0 if noise else tr.screened.m_eff,
             "log10_p": tr.log_p / math.log(10),
             "log10_p_familywise": tr.log_p_fw / math.log(10),
@@ -135,7 +150,8 @@ def _evidence(tr: Trial, d: el.ElpdDiff | None, opts: Options, n_cand: int, tria
             "elpd_criterion": None if d is None else d.ic,
             "n_sims": opts.n_sims,
             "refitted": [{"effect": t.screened.candidate.effect, "likelihood_ratio": t.lr,
-                          "log10_p": t.log_p / math.log(10)} for t in trials],
+                          "bartlett_factor": t.bartlett, "log10_p": t.log_p / math.log(10)}
+                         for t in trials],
             "screening": ranking}
 
 
@@ -151,7 +167,8 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
     second look is not calibrated when the record's noise really has a walk (any slow
     term then looks significant: family-wise p down to 1e-15 on clean records), so the
     screening gate of :func:`fogbayes.loop.ranking.supported_trials` reads the first
-    look's p (``Screened.gate_log_p``), the one under the noise model the data chose.
+    look's p (``Screened.gate_log_p``), the one under the noise model the data chose --
+    unless the candidate's own refit drops the walk (:func:`_trial`).
 
     The screening whitens and simulates under the REML noise hyperparameters of the
     current design (:mod:`fogbayes.diagnose.reml`): ML ones leave too little slow noise
@@ -162,7 +179,7 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
                              seed=seed)
     pairs = {s.candidate.effect: (s, wm) for s in screened}
     spec = fit.noise.spec
-    if spec.random_walk and spec.bank_taus and float(unpack(spec, fit.noise.theta).log_rw) > RW_MODE:
+    if in_walk_mode(fit):
         alt_spec = spec._replace(random_walk=False)
         nf = ns.fit_noise(alt_spec, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w)
         wm2, screened2 = ev.screen(ctx, with_reml(ctx, fit._replace(noise=nf), cache), cands,
@@ -198,8 +215,9 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
     # already bent towards it), so markov_noise is always refitted.
     short = pairs[:opts.n_refit] + [p for p in pairs[opts.n_refit:]
                                     if p[0].candidate.kind == "noise"]
-    trials = sorted((t for t in (_safe_trial(ctx, fit, wm, s, n_cand) for s, wm in short)
-                     if t is not None), key=lambda t: t.log_p)
+    trials = sorted((t for t in (_safe_trial(ctx, fit, wm, s, n_cand, alpha=opts.alpha,
+                                             seed=opts.seed + 7919 * step + 17)
+                                 for s, wm in short) if t is not None), key=lambda t: t.log_p)
     supported = supported_trials(ctx, fit, trials, opts, n_cand, cache)
     if not supported:
         best = trials[0] if trials else None
