@@ -33,7 +33,8 @@ def supported_trials(ctx, fit, trials, opts, n_cand: int, cache) -> list:
         # The refitted ratio gains from re-estimating the noise, which the fixed-noise
         # bootstrap does not see: a linear candidate must also be suggestive (family-wise
         # p < SCREEN_GATE) in the calibrated screening itself -- under the fitted noise
-        # model, not the second look without a random walk (core._screen_all).
+        # model, not the second look without a random walk (core._screen_all), unless the
+        # candidate's refit dropped the walk (core._trial then clears gate_log_p).
         s = tr.screened
         gate = s.log_p if s.gate_log_p is None else s.gate_log_p
         if s.candidate.kind != "noise" and \
