@@ -35,7 +35,7 @@ def test_covariates_blocks_and_segments_equal_the_workflow(fleet, rate_method):
     masks = [None, rng.random(fleet[1].n) < 0.05, None, np.zeros(fleet[3].n, bool), None]
     masks[3][10:40] = True  # whole 1 s blocks left out: they are dropped
     got = prepare.blocks(fleet, rates, zs, spec, proc, masks)
-    segs = prepare.segments(fleet, zs)
+    segs = prepare.segments(fleet, [z[:, 0] for z in zs])
     for i, rec in enumerate(fleet):
         z_ref = sample_covariates(rec, spec, proc)
         np.testing.assert_allclose(zs[i], z_ref, rtol=1e-9, atol=1e-11)  # FFT vs direct filter

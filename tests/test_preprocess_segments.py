@@ -162,3 +162,59 @@ def test_segment_errors():
         segment_rate_table(t, None, np.zeros(100))
     with pytest.raises(TooShortError, match="no plateau"):
         segment_rate_table(t, np.sin(t), min_duration=50.0)
+
+
+def _merge_reference(labels, t, min_duration):
+    """The merge rule written plainly (the Python implementation the compiled loop replaced)."""
+    edges = np.flatnonzero(np.diff(labels)) + 1
+    runs = [[int(labels[a]), int(a), int(b)]
+            for a, b in zip(np.r_[0, edges], np.r_[edges, labels.size])]
+    end = np.r_[t[1:], t[-1] + np.median(np.diff(t))]
+    while len(runs) > 1:
+        d = [float(end[r[2] - 1] - t[r[1]]) for r in runs]
+        i = int(np.argmin(d))
+        if d[i] >= min_duration:
+            break
+        left = runs[i - 1] if i > 0 else None
+        right = runs[i + 1] if i + 1 < len(runs) else None
+        if left is not None and right is not None and left[0] == right[0]:
+            runs[i][0] = left[0]
+        elif left is None or (right is not None and d[i + 1] > d[i - 1]):
+            runs[i][0] = right[0]
+        else:
+            runs[i][0] = left[0]
+        merged = [runs[0]]
+        for r in runs[1:]:
+            if r[0] == merged[-1][0]:
+                merged[-1] = [r[0], merged[-1][1], r[2]]
+            else:
+                merged.append(r)
+        runs = merged
+    return runs
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_compiled_merge_equals_the_plain_rule(seed):
+    from fogbayes.preprocess.segment_loops import merge_runs, run_stats
+
+    rng = np.random.default_rng(seed)
+    n = 400
+    t = np.cumsum(rng.uniform(0.5, 1.5, n))  # irregular steps: durations differ, ties rare
+    if seed % 2:
+        t = np.arange(n, dtype=float)  # a grid: many equal durations (the tie rules)
+    # flickering labels: runs of 1-40 samples of -1/0/1
+    labels = np.repeat(rng.integers(-1, 2, n), rng.integers(1, 40, n))[:n].reshape(1, n)
+    labels = np.vstack([labels, rng.integers(-1, 2, (2, n))])  # and pure noise rows
+    end = np.r_[t[1:], t[-1] + np.median(np.diff(t))]
+    lab, start, stop, count = merge_runs(labels, t, end, 30.0)
+    T = rng.normal(20.0, 1.0, labels.shape)
+    mean, slope = run_stats(T, t, start, stop, count)
+    for s in range(labels.shape[0]):
+        ref = _merge_reference(labels[s], t, 30.0)
+        got = [[int(lab[s, k]), int(start[s, k]), int(stop[s, k])] for k in range(count[s])]
+        assert got == ref
+        for k, (_, a, b) in enumerate(ref):
+            assert mean[s, k] == pytest.approx(T[s, a:b].mean(), rel=1e-13)
+            tc = t[a:b] - t[a:b].mean()
+            want = 0.0 if b - a < 2 else np.dot(tc, T[s, a:b] - T[s, a:b].mean()) / np.dot(tc, tc)
+            assert slope[s, k] == pytest.approx(want, rel=1e-9, abs=1e-13)

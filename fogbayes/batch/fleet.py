@@ -39,7 +39,7 @@ from .jobs import (
 def run_batch(folder: str | Path, *, model: str, out: str | Path, task: str = "fit",
               engine: str = "local", address: str | None = None, workers: int = 2,
               pattern: str = "*.csv", vectorize: bool = False,
-              options: JobOptions | dict | None = None, solver: str = "gram",
+              options: JobOptions | dict | None = None, solver: str | None = None,
               on_done: Callable[[dict], None] | None = None) -> dict:
     """Run ``task`` on every recording of ``folder``; write and return the summary.
 

@@ -9,8 +9,9 @@ the whole group:
 * dT/dt: one 2-D filter call (:func:`fogbayes.preprocess.temperature_rate` accepts
   (sensors, n) temperatures);
 * block means (``average_s`` blocks, with or without Pauta-flagged samples left out): the
-  block layout is built once (:func:`fogbayes.preprocess.blocks.block_index`) and every
-  column of every sensor is summed by one reduction (:func:`.metrics.block_sums`);
+  block layout is built once (:func:`fogbayes.preprocess.blocks.block_index`) and one
+  compiled loop (:func:`.kernels.masked_block_means`) averages every sensor's rate and
+  covariates over it;
 * segments: :func:`fogbayes.preprocess.segments.segment_thermal_rows` (one filter call).
 
 The results equal the per-recording functions' to rounding (sums in another order). Paper
@@ -20,6 +21,8 @@ through the per-recording functions.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..errors import FogbayesError
@@ -28,7 +31,7 @@ from ..preprocess.blocks import block_index
 from ..preprocess.segments import segment_thermal_rows
 from ..workflow._thermal_data import Blocks, fit_blocks, sample_covariates
 from ..workflow.thermal import thermal_segments
-from .metrics import block_means, block_sums
+from . import kernels
 
 
 def clock_groups(recs) -> list[list[int]]:
@@ -37,6 +40,15 @@ def clock_groups(recs) -> list[list[int]]:
     for i, r in enumerate(recs):
         groups.setdefault(np.ascontiguousarray(r.time).tobytes(), []).append(i)
     return list(groups.values())
+
+
+def covariate_major(zs) -> np.ndarray:
+    """Per-sample covariates of S sensors, (n, c) each, as one C-contiguous (S, c, n) array
+    (each covariate of a sensor one contiguous row: the layout :mod:`.kernels` reads)."""
+    out = np.empty((len(zs), zs[0].shape[1], zs[0].shape[0]))
+    for s, z in enumerate(zs):
+        out[s] = z.T
+    return out
 
 
 def _channel_index(rec, name: str) -> int | None:
@@ -71,74 +83,107 @@ def covariates(recs, spec, proc) -> list[np.ndarray]:
     return out
 
 
+class BlockArrays(NamedTuple):
+    """Fit blocks of S recordings stacked: time, y (S, m), z (S, c, m), count (S, m).
+
+    A block with count 0 (all its samples flagged, or padding after a shorter recording)
+    holds NaN and is not a block of that recording: ``fit_blocks`` drops it. Weighted by
+    its count it adds nothing to a fit, so the stacked fit equals the one without it.
+    """
+
+    time: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    count: np.ndarray
+
+    def of(self, s: int) -> Blocks:
+        """Recording s's ``Blocks``, as ``fit_blocks`` returns them."""
+        keep = self.count[s] > 0
+        return Blocks(self.time[s, keep], self.y[s, keep],
+                      np.ascontiguousarray(self.z[s][:, keep]).T, self.count[s, keep])
+
+
+def block_arrays(recs, rates, Z, spec, proc, use=None) -> BlockArrays:
+    """Stacked ``fit_blocks(rec, rate, z, spec, proc, ~use)`` of every recording.
+
+    ``rates`` (S, n) deg/h, ``Z`` (S, c, n) covariates (:func:`covariate_major`), ``use``
+    (S, n) bool, False for samples left out of the means (Pauta-flagged; default: all used).
+    """
+    S, n = rates.shape
+    use = np.ones((S, n), bool) if use is None else np.asarray(use, bool)
+    parts = []
+    for group in clock_groups(recs):
+        if proc.mode == "paper" or len(group) == 1:
+            for i in group:
+                b = fit_blocks(recs[i], rates[i], Z[i].T, spec, proc, ~use[i])
+                parts.append(([i], b.time[None], b.y[None], b.z.T[None], b.count[None]))
+            continue
+        g = np.asarray(group)
+        t = recs[group[0]].time
+        bi = block_index(t, proc.average_s, partial="drop")
+        whole = g.size == S  # one clock for all (groups are in first-seen order): no copies
+        y, z, u = (rates, Z, use) if whole else (rates[g], Z[g], use[g])
+        if np.all(bi.stop - bi.start == 1):  # blocks of one sample are the samples themselves
+            rows = bi.start
+            if np.all(np.diff(rows) == 1):  # consecutive samples: views, not copies
+                rows = slice(int(rows[0]), int(rows[-1]) + 1)
+            tm = np.broadcast_to(t[rows], (g.size, bi.start.size))
+            ym, zm, cnt = y[:, rows], z[:, :, rows], u[:, rows].astype(np.int64)
+            if not u.all():  # left-out samples are empty blocks
+                ym = np.where(cnt > 0, ym, np.nan)
+                zm = np.where(cnt[:, None, :] > 0, zm, np.nan)
+        else:
+            tm, ym, zm, cnt = kernels.masked_block_means(t, y, z, u, bi.start, bi.stop)
+        parts.append((group, tm, ym, zm, cnt))
+    if len(parts) == 1 and parts[0][0] == list(range(S)):
+        return BlockArrays(*parts[0][1:])
+    m = max(p[2].shape[1] for p in parts)
+    c = Z.shape[1]
+    out = BlockArrays(np.full((S, m), np.nan), np.full((S, m), np.nan),
+                      np.full((S, c, m), np.nan), np.zeros((S, m), np.int64))
+    for idx, tm, ym, zm, cnt in parts:
+        k = tm.shape[1]
+        out.time[idx, :k], out.y[idx, :k], out.z[idx, :, :k], out.count[idx, :k] = tm, ym, zm, cnt
+    return out
+
+
+def stack_blocks(blocks: list[Blocks]) -> BlockArrays:
+    """``Blocks`` of several recordings as :class:`BlockArrays` (padded with count-0 blocks)."""
+    m = max(b.y.size for b in blocks)
+    S, c = len(blocks), blocks[0].z.shape[1]
+    out = BlockArrays(np.full((S, m), np.nan), np.full((S, m), np.nan),
+                      np.full((S, c, m), np.nan), np.zeros((S, m), np.int64))
+    for s, b in enumerate(blocks):
+        k = b.y.size
+        out.time[s, :k], out.y[s, :k], out.z[s, :, :k], out.count[s, :k] = b.time, b.y, b.z.T, b.count
+    return out
+
+
 def blocks(recs, rates, zs, spec, proc, masks=None) -> list[Blocks]:
     """``fit_blocks(rec, rate, z, spec, proc, mask)`` of every recording.
 
     ``masks``: per recording, None or bool (n,) True for samples left out of the means
     (Pauta-flagged); a block whose samples are all left out is dropped, as there.
     """
-    masks = [None] * len(recs) if masks is None else masks
-    out: list[Blocks | None] = [None] * len(recs)
-    for group in clock_groups(recs):
-        if proc.mode == "paper" or len(group) == 1:
-            for i in group:
-                out[i] = fit_blocks(recs[i], rates[i], zs[i], spec, proc, masks[i])
-            continue
-        t = recs[group[0]].time
-        bi = block_index(t, proc.average_s, partial="drop")
-        c = zs[group[0]].shape[1]
-        cols = np.stack([np.column_stack([rates[i], zs[i]]).T for i in group])  # (S, c+1, n)
-        use = np.stack([np.ones(t.size, bool) if masks[i] is None else ~np.asarray(masks[i])
-                        for i in group])
-        tm, means, cnt = _masked_block_means(t, cols, use, bi.start, bi.stop)
-        for j, i in enumerate(group):
-            keep = cnt[j] > 0
-            if keep.all():
-                out[i] = Blocks(tm[j], means[j, 0], means[j][1:].T, cnt[j])
-            else:  # z as (blocks, c) in column order: per-column min/max stay contiguous
-                out[i] = Blocks(tm[j, keep], means[j, 0, keep],
-                                np.ascontiguousarray(means[j][1:, keep]).T, cnt[j, keep])
-    return out
+    rates = np.stack(rates)
+    use = None if masks is None else np.stack(
+        [np.ones(rates.shape[1], bool) if m is None else ~np.asarray(m, bool) for m in masks])
+    arrays = block_arrays(recs, rates, covariate_major(zs), spec, proc, use)
+    return [arrays.of(s) for s in range(len(recs))]
 
 
-def _masked_block_means(t, x, use, start, stop):
-    """Per sensor: mean time of the used samples (of all, where none is used), means of the
-    used samples of each column, and their count (``preprocess.blocks.group_mean``).
-
-    t (n,), x (S, k, n), use (S, n) bool; blocks are the ranges [start_j, stop_j).
-    """
-    S, k, n = x.shape
-    length = stop - start
-    # each block sample's offset from the block's first time stamp (Unix times lose nothing
-    # to rounding once it is subtracted); samples outside the blocks get 0
-    pos = np.repeat(start, length) + (np.arange(length.sum())
-                                      - np.repeat(np.cumsum(length) - length, length))
-    rel = np.zeros(n)
-    rel[pos] = t[pos] - np.repeat(t[start], length)
-    if use.all():  # nothing left out: plain block means
-        sums = block_sums(x.reshape(S * k, n), start, stop).reshape(S, k, -1)
-        tm = t[start] + block_means(rel[None, :], start, stop)[0]
-        cnt = np.broadcast_to(length, (S, length.size))
-        return np.broadcast_to(tm, (S, tm.size)), sums / length, cnt
-    w = use.astype(float)
-    cnt = np.rint(block_sums(w, start, stop)).astype(np.int64)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        used_dt = block_sums(w * rel, start, stop)
-        all_dt = block_means(rel[None, :], start, stop)[0]
-        tm = t[start] + np.where(cnt > 0, used_dt / cnt, all_dt)
-        sums = block_sums((x * w[:, None, :]).reshape(S * k, n), start, stop).reshape(S, k, -1)
-        means = np.where(cnt[:, None, :] > 0, sums / cnt[:, None, :], np.nan)
-    return tm, means, cnt
-
-
-def segments(recs, zs) -> list[list]:
-    """``thermal_segments(rec, z)`` of every recording (one filter call per clock group)."""
+def segments(recs, temperatures) -> list[list]:
+    """``thermal_segments(rec, z)`` of every recording, from the fit's temperature
+    covariate ``z[:, 0]`` of each (``temperatures``: (S, n) or one (n,) per recording); one
+    filter call per clock group."""
     out: list[list | None] = [None] * len(recs)
     for group in clock_groups(recs):
         try:
-            rows = segment_thermal_rows(recs[group[0]].time, np.stack([zs[i][:, 0] for i in group]))
+            rows = segment_thermal_rows(recs[group[0]].time,
+                                        np.stack([temperatures[i] for i in group]))
         except FogbayesError:  # too short or irregular: each as the workflow does (maybe [])
-            rows = [thermal_segments(recs[i], zs[i]) for i in group]
+            rows = [thermal_segments(recs[i], np.asarray(temperatures[i])[:, None])
+                    for i in group]
         for i, r in zip(group, rows):
             out[i] = r
     return out

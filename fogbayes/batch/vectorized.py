@@ -39,6 +39,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from functools import lru_cache, partial
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -49,9 +50,8 @@ from ..export import coefficient_document
 from ..inference.compare import rms_criterion
 from ..inference.lsq import lstsq, lstsq_gram
 from ..metrics import DEFAULT_WINDOWS
-from ..models.polynomial import PolyBasis, design
-from ..models.thermal import thermal_basis
-from ..preprocess import pauta_flags
+from ..models.polynomial import PolyBasis, design, range_scaling
+from ..models.thermal import covariate_names, thermal_terms
 from ..workflow._thermal_data import (
     Processing,
     fit_blocks,
@@ -60,17 +60,22 @@ from ..workflow._thermal_data import (
 )
 from ..workflow.thermal import (
     MODELS,
-    clamp_covariates,
     model_spec,
     parse_orders,
 )
-from . import prepare
+from . import kernels, prepare
 from .files import FleetError
 from .metrics import segment_reports
 
-SOLVERS = {"gram": lstsq_gram, "qr": lstsq}
+SOLVERS = {"gram": lstsq_gram, "qr": lstsq}  # the jit(vmap) programs; "numba": .kernels
+RCOND = 1e-10  # rank test of the solvers (inference.lsq's default)
 _UNSUPPORTED = ("order_criterion", "noise", "ar_order", "ma_order", "num_warmup",
                 "num_samples", "num_chains", "level", "bayes_average_s")
+
+
+def default_solver() -> str:
+    """Compiled loops over sensors on a CPU; the jit(vmap) normal equations on a GPU/TPU."""
+    return "numba" if jax.default_backend() == "cpu" else "gram"
 
 
 def _unit_basis(basis: PolyBasis) -> PolyBasis:
@@ -104,27 +109,27 @@ def batched_bias(unit: PolyBasis):
     return jax.jit(jax.vmap(partial(_bias_one, unit=unit)))
 
 
-def _pad(rows: list[np.ndarray], m: int) -> np.ndarray:
-    """Stack arrays of lengths <= m; padding repeats the last row (finite, weight 0)."""
-    return np.stack([np.concatenate([r, np.repeat(r[-1:], m - len(r), axis=0)]) for r in rows])
-
-
-def _prepare(rec, spec, proc, mask=None):
-    """One recording's rate (deg/h), covariates, block means and scaled basis (the workflow's)."""
+def _prepare(rec, spec, proc) -> tuple:
+    """One recording's rate (deg/h), covariates and block means (the workflow's)."""
     rate = rec.rate("deg/h")
     z = sample_covariates(rec, spec, proc)
-    return _reblock(rec, rate, z, spec, proc, mask)
+    blocks = fit_blocks(rec, rate, z, spec, proc, None)
+    _check_blocks(rec, blocks.y.size, spec)
+    return rate, z, blocks
 
 
-def _prepare_all(recs, spec, proc, on_error) -> tuple[list[int], list[tuple]]:
-    """(indices fitted, their (rate, z, blocks, basis)): per clock group in one go
-    (:mod:`.prepare`); when that fails, recording by recording to report each bad one."""
+def _prepare_all(recs, spec, proc, on_error) -> tuple[list[int], np.ndarray, np.ndarray,
+                                                       prepare.BlockArrays]:
+    """Indices fitted, their rates (S, n), covariates (S, c, n) and block arrays: per clock
+    group in one go (:mod:`.prepare`); when that fails, recording by recording to report
+    each bad one."""
     try:
-        rates = [r.rate("deg/h") for r in recs]
-        zs = prepare.covariates(recs, spec, proc)
-        blocks = prepare.blocks(recs, rates, zs, spec, proc)
-        return list(range(len(recs))), [_with_basis(r, y, z, b, spec) for r, y, z, b
-                                         in zip(recs, rates, zs, blocks)]
+        R = np.stack([r.rate("deg/h") for r in recs])
+        Z = prepare.covariate_major(prepare.covariates(recs, spec, proc))
+        arrays = prepare.block_arrays(recs, R, Z, spec, proc)
+        for r, k in zip(recs, (arrays.count > 0).sum(axis=1).tolist()):
+            _check_blocks(r, k, spec)
+        return list(range(len(recs))), R, Z, arrays
     except FogbayesError:
         pass  # some recording cannot be fitted: find it (and any other) one by one
     keep, prep = [], []
@@ -136,34 +141,69 @@ def _prepare_all(recs, spec, proc, on_error) -> tuple[list[int], list[tuple]]:
             if on_error is None:
                 raise
             on_error(i, exc)
-    return keep, prep
+    if not keep:
+        return [], np.empty((0, 0)), np.empty((0, 0, 0)), None
+    rates, zs, blocks = zip(*prep)
+    return keep, np.stack(rates), prepare.covariate_major(zs), prepare.stack_blocks(blocks)
 
 
-def _reblock(rec, rate, z, spec, proc, mask):
-    return _with_basis(rec, rate, z, fit_blocks(rec, rate, z, spec, proc, mask), spec)
-
-
-def _with_basis(rec, rate, z, blocks, spec):
-    basis = thermal_basis(spec, blocks.z)
-    if blocks.y.size < basis.n_terms + 2:  # the workflow's own limit (workflow.thermal._lsq)
-        raise TooShortError(f"{blocks.y.size} block means cannot fit {basis.n_terms} "
-                            "coefficients", file=rec.meta.source, column="output",
+def _check_blocks(rec, n_blocks: int, spec) -> None:
+    p = len(thermal_terms(spec))
+    if n_blocks < p + 2:  # the workflow's own limit (workflow.thermal._lsq)
+        raise TooShortError(f"{n_blocks} block means cannot fit {p} coefficients",
+                            file=rec.meta.source, column="output",
                             fix="record longer, average over shorter blocks or lower the order")
-    return rate, z, blocks, basis
 
 
-def _solve(blocks: list, bases: list, solver: str) -> list[tuple]:
-    """One batched solve over sensors (blocks padded to one length); numpy results each."""
-    m = max(b.y.size for b in blocks)
-    w = _pad([b.count.astype(float) for b in blocks], m)
-    for s, b in enumerate(blocks):
-        w[s, b.y.size:] = 0.0
-    args = (_pad([b.z for b in blocks], m), _pad([b.y for b in blocks], m), w,
-            np.array([bs.centre for bs in bases]), np.array([bs.scale for bs in bases]),
-            np.array([float(b.y.size) for b in blocks]))
-    out = batched_solver(_unit_basis(bases[0]), solver)(*(jnp.asarray(a) for a in args))
-    out = [np.asarray(a) for a in out]
-    return [tuple(a[s] for a in out) for s in range(len(blocks))]
+class Fits(NamedTuple):
+    """Least-squares results of every sensor, stacked: coef (S, p), cov (S, p, p),
+    resid (S, m) (NaN at count-0 blocks), s2, dof, ok (S,)."""
+
+    coef: np.ndarray
+    cov: np.ndarray
+    resid: np.ndarray
+    s2: np.ndarray
+    dof: np.ndarray
+    ok: np.ndarray
+
+
+def _fit(arrays: prepare.BlockArrays, spec, solver: str
+         ) -> tuple[list[PolyBasis], np.ndarray, np.ndarray, Fits]:
+    """Every sensor's scaled basis (its blocks' covariate range), that range lo/hi (S, c)
+    and the batched least-squares solve in those bases, each block weighted by its count
+    (count-0 blocks weigh nothing)."""
+    w = arrays.count.astype(float)
+    n_valid = (arrays.count > 0).sum(axis=1).astype(float)
+    lo, hi = np.nanmin(arrays.z, axis=2), np.nanmax(arrays.z, axis=2)  # NaN: count-0 blocks
+    centre, scale = range_scaling(lo, hi)
+    names, terms = covariate_names(spec), thermal_terms(spec)
+    bases = [PolyBasis(names, terms, tuple(c), tuple(s))
+             for c, s in zip(centre.tolist(), scale.tolist())]
+    if solver == "numba":
+        fits = Fits(*kernels.fit_gram(arrays.z, arrays.y, w, centre, scale, n_valid,
+                                      _exponents(bases[0]), RCOND))
+    else:  # XLA multiplies the weight-0 rows too: give them finite values
+        empty = w == 0
+        z = np.where(empty[:, None, :], centre[:, :, None], arrays.z).transpose(0, 2, 1)
+        y = np.where(empty, 0.0, arrays.y)
+        out = batched_solver(_unit_basis(bases[0]), solver)(
+            *(jnp.asarray(a) for a in (z, y, w, centre, scale, n_valid)))
+        fits = Fits(*(np.array(a) for a in out))  # writable copies
+        fits.resid[empty] = np.nan
+    return bases, lo, hi, fits
+
+
+def _replace(fits: Fits, rows: np.ndarray, new: Fits) -> Fits:
+    """``fits`` with the sensors ``rows`` taken from ``new`` (residuals padded with NaN)."""
+    m = max(fits.resid.shape[1], new.resid.shape[1])
+    widen = {"resid": lambda a: np.pad(a, ((0, 0), (0, m - a.shape[1])),
+                                       constant_values=np.nan)}
+    out = {}
+    for name in Fits._fields:
+        keep = np.array(widen.get(name, np.asarray)(getattr(fits, name)))
+        keep[rows] = widen.get(name, np.asarray)(getattr(new, name))
+        out[name] = keep
+    return Fits(**out)
 
 
 def _check(model: str, recs: list, orders, bayes: bool, options: dict) -> None:
@@ -177,7 +217,8 @@ def _check(model: str, recs: list, orders, bayes: bool, options: dict) -> None:
         raise FleetError(f"--vectorize needs one order, got '{orders}'", column="--orders",
                          fix="name one order (e.g. --orders 3), or drop --vectorize to choose")
     n, dt = recs[0].n, recs[0].sampling().dt_median
-    for r in recs[1:]:
+    for group in prepare.clock_groups(recs)[1:]:  # a rig's sensors share one clock
+        r = recs[group[0]]
         if r.n != n or not np.isclose(r.sampling().dt_median, dt, rtol=1e-9):
             raise FleetError(f"{r.n} samples every {r.sampling().dt_median:g} s, the first "
                              f"recording has {n} every {dt:g} s", file=r.meta.source,
@@ -187,7 +228,7 @@ def _check(model: str, recs: list, orders, bayes: bool, options: dict) -> None:
 
 
 def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: bool = False,
-                   seed: int = 0, solver: str = "gram",
+                   seed: int = 0, solver: str | None = None,
                    on_error: Callable[[int, FogbayesError], None] | None = None,
                    **options) -> list[dict | None]:
     """Fit documents of ``recs`` (same length and sampling), as ``fit_recording`` writes them.
@@ -201,8 +242,10 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
 
     if not recs:
         return []
-    if solver not in SOLVERS:
-        raise FogbayesError(f"unknown solver {solver!r}", column="solver", fix="use 'gram' or 'qr'")
+    solver = default_solver() if solver is None else solver
+    if solver not in ("numba", *SOLVERS):
+        raise FogbayesError(f"unknown solver {solver!r}", column="solver",
+                            fix="use 'numba' (CPU), 'gram' or 'qr' (jit(vmap), any device)")
     _check(model, recs, orders, bayes, options)
     known = set(Processing._fields[1:]) | {"processing", "windows", "cross", "extra", "gradient",
                                            "extra_order", "temperature"}
@@ -215,52 +258,71 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     t_order, r_order = parse_orders(model, orders)[0]
     spec = model_spec(model, t_order, r_order, options)
-    keep, prep = _prepare_all(recs, spec, proc, on_error)
+    keep, R, Z, arrays = _prepare_all(recs, spec, proc, on_error)
     out: list[dict | None] = [None] * len(recs)
     if not keep:
         return out
     good = [recs[i] for i in keep]
-    rates, zs, blocks, bases = (list(col) for col in zip(*prep))
-    fits = _solve(blocks, bases, solver)
-    flags = [None] * len(good)
+    bases, lo, hi, fits = _fit(arrays, spec, solver)
+    block_count = arrays.count
+    counts = [None] * len(good)
     if proc.outliers == "pauta":
-        bias = _bias(fits, zs, bases)
-        flags = [pauta_flags(y - b, n_sigma=proc.n_sigma) for y, b in zip(rates, bias)]
-        redo = [s for s, f in enumerate(flags) if f.count]
-        if redo:  # refit the flagged sensors on block means without their flagged samples
-            sub = [good[s] for s in redo]
-            new = prepare.blocks(sub, [rates[s] for s in redo], [zs[s] for s in redo], spec,
-                                 proc, [flags[s].mask for s in redo])
-            for s, b in zip(redo, new):  # too few blocks left raises, as the workflow's refit
-                _, _, blocks[s], bases[s] = _with_basis(good[s], rates[s], zs[s], b, spec)
-            for s, fit in zip(redo, _solve([blocks[s] for s in redo], [bases[s] for s in redo],
-                                           solver)):
-                fits[s] = fit
-    valid = [{nm: (float(a), float(b)) for nm, a, b in
-              zip(bs.names, bl.z.min(axis=0), bl.z.max(axis=0))} for bs, bl in zip(bases, blocks)]
+        mask, count, _, _ = kernels.pauta(R - _bias(solver, fits.coef, Z, bases), proc.n_sigma,
+                                          100)  # pauta_flags' max_iter
+        counts = count.tolist()
+        redo = np.flatnonzero(count)
+        if redo.size:  # refit the flagged sensors on block means without their flagged samples
+            new = prepare.block_arrays([good[s] for s in redo], R[redo], Z[redo], spec, proc,
+                                       ~mask[redo])
+            for s, k in zip(redo, (new.count > 0).sum(axis=1).tolist()):
+                _check_blocks(good[s], k, spec)  # too few blocks left raises, as the workflow's
+            new_bases, lo[redo], hi[redo], new_fits = _fit(new, spec, solver)
+            for s, bs in zip(redo, new_bases):
+                bases[s] = bs
+            fits = _replace(fits, redo, new_fits)
+            block_count = _replace_counts(block_count, redo, new.count)
     # compensated output for the metrics, covariates clamped as compensation clamps them
-    clamped = [clamp_covariates(z, bs, v) for z, bs, v in zip(zs, bases, valid)]
-    rates_arr = np.stack(rates)
-    after = rates_arr - _bias(fits, clamped, bases)
-    metrics = segment_reports(rates_arr, after, [r.time for r in good],
-                              prepare.segments(good, zs), windows=windows)
+    after = R - _bias(solver, fits.coef, np.clip(Z, lo[:, :, None], hi[:, :, None]), bases)
+    metrics = segment_reports(R, after, [r.time for r in good],
+                              prepare.segments(good, Z[:, 0, :]), windows=windows)
+    version = fogbayes.__version__
+    s2, dof, ok = fits.s2.tolist(), fits.dof.tolist(), fits.ok.tolist()
+    lo, hi = lo.tolist(), hi.tolist()
     for s, rec in enumerate(good):
-        coef, cov, resid, s2, dof, ok = fits[s]
-        out[keep[s]] = _document(rec, model, spec, proc, bases[s], blocks[s], valid[s], coef,
-                                 cov, resid[:blocks[s].y.size], s2, dof, bool(ok), flags[s],
-                                 metrics[s], fogbayes.__version__)
+        valid = dict(zip(bases[s].names, zip(lo[s], hi[s])))
+        used = block_count[s] > 0
+        out[keep[s]] = _document(rec, model, spec, proc, bases[s], int(used.sum()), valid,
+                                 fits.coef[s], fits.cov[s], fits.resid[s, :used.size][used],
+                                 s2[s], dof[s], bool(ok[s]), counts[s], metrics[s], version)
     return out
 
 
-def _bias(fits, zs, bases) -> np.ndarray:
-    """Modelled bias X(z_s) b_s at every sample of every sensor, one batched call."""
+def _replace_counts(count: np.ndarray, rows: np.ndarray, new: np.ndarray) -> np.ndarray:
+    m = max(count.shape[1], new.shape[1])
+    out = np.zeros((count.shape[0], m), np.int64)
+    out[:, :count.shape[1]] = count
+    out[rows] = 0
+    out[rows, :new.shape[1]] = new
+    return out
+
+
+def _bias(solver: str, coef: np.ndarray, Z: np.ndarray, bases: list) -> np.ndarray:
+    """Modelled bias X(z_si) b_s at every sample of every sensor (Z (S, c, n)), one call."""
+    centre = np.array([b.centre for b in bases])
+    scale = np.array([b.scale for b in bases])
+    if solver == "numba":
+        return kernels.evaluate(coef, Z, centre, scale, _exponents(bases[0]))
     return np.asarray(batched_bias(_unit_basis(bases[0]))(
-        jnp.asarray(np.stack([f[0] for f in fits])), jnp.asarray(np.stack(zs)),
-        jnp.asarray([b.centre for b in bases]), jnp.asarray([b.scale for b in bases])))
+        jnp.asarray(coef), jnp.asarray(Z.transpose(0, 2, 1)), jnp.asarray(centre),
+        jnp.asarray(scale)))
 
 
-def _document(rec, model, spec, proc, basis, blocks, valid, coef, cov, resid, s2, dof, ok,
-              flags, metrics, version) -> dict:
+def _exponents(basis: PolyBasis) -> np.ndarray:
+    return np.array(basis.terms, np.int64).reshape(basis.n_terms, len(basis.names))
+
+
+def _document(rec, model, spec, proc, basis, n_blocks, valid, coef, cov, resid, s2, dof, ok,
+              n_flagged, metrics, version) -> dict:
     """The fields of ``fit_recording``'s document (same keys, same order), from this solve."""
     warnings = [] if ok else [(
         "the design is rank deficient: some covariate does not vary enough (e.g. dT/dt in a "
@@ -274,8 +336,8 @@ def _document(rec, model, spec, proc, basis, blocks, valid, coef, cov, resid, s2
             valid_range=valid)},
         "processing": proc._asdict(),
         "outliers": {"method": proc.outliers, "n_sigma": proc.n_sigma,
-                     "count": 0 if flags is None else flags.count},
-        "fit": {"n_blocks": int(blocks.y.size), "n_params": basis.n_terms,
+                     "count": 0 if n_flagged is None else n_flagged},
+        "fit": {"n_blocks": n_blocks, "n_params": basis.n_terms,
                 "rms_criterion": rms_criterion(resid, basis.n_terms),
                 "residual_std": float(np.sqrt(s2)), "dof": int(dof),
                 "stderr_note": "least-squares standard errors assume white block means; "

@@ -103,11 +103,18 @@ def make_basis(names: Sequence[str], terms: Sequence[tuple[int, ...]], z: np.nda
     if not _downward_closed(terms):
         raise ShapeError(f"the term set {terms} is not downward closed",
                          fix="include every lower-order monomial (e.g. T when T^2 is used)")
-    lo, hi = z.min(axis=0), z.max(axis=0)
-    c = (lo + hi) / 2 if centre is None else np.asarray(centre, dtype=float)
-    half = (hi - lo) / 2
-    s = np.where(half > 0, half, 1.0) if scale is None else np.asarray(scale, dtype=float)
+    mid, half = range_scaling(z.min(axis=0), z.max(axis=0))
+    c = mid if centre is None else np.asarray(centre, dtype=float)
+    s = half if scale is None else np.asarray(scale, dtype=float)
     return PolyBasis(names, terms, tuple(float(v) for v in c), tuple(float(v) for v in s))
+
+
+def range_scaling(lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """``centre = (lo + hi) / 2``, ``scale = (hi - lo) / 2`` (1 where that is 0), elementwise:
+    the scaling :func:`make_basis` gives to covariates spanning ``[lo, hi]``."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    half = (hi - lo) / 2
+    return (lo + hi) / 2, np.where(half > 0, half, 1.0)
 
 
 def design(z, basis: PolyBasis):

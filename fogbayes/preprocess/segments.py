@@ -22,8 +22,16 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError
-from ._checks import GAP_FACTOR, as_1d, check_time, check_window, median_step, same_length
-from .temperature_rate import ls_slope, temperature_rate
+from ._checks import (
+    GAP_FACTOR,
+    as_1d,
+    check_time,
+    check_window,
+    median_step,
+    same_length,
+)
+from .segment_loops import merge_runs, run_stats
+from .temperature_rate import temperature_rate
 
 _KINDS = {0: "soak", 1: "ramp_up", -1: "ramp_down"}
 
@@ -39,46 +47,6 @@ class Segment(NamedTuple):
     t_stop: float
     mean_temperature: float
     mean_rate: float
-
-
-def _runs(labels: np.ndarray) -> list[list[int]]:
-    """[label, start, stop] for each run of equal labels."""
-    edges = np.flatnonzero(np.diff(labels)) + 1
-    starts = np.r_[0, edges]
-    stops = np.r_[edges, labels.size]
-    return [[int(labels[a]), int(a), int(b)] for a, b in zip(starts, stops)]
-
-
-def merge_short_runs(labels: np.ndarray, t: np.ndarray, min_duration: float) -> list[list[int]]:
-    """Runs of ``labels`` with those shorter than ``min_duration`` (s) merged away."""
-    runs = _runs(labels)
-    end = np.r_[t[1:], t[-1] + median_step(t)] if t.size > 1 else t + 1.0
-
-    def duration(r):
-        return float(end[r[2] - 1] - t[r[1]])
-
-    while len(runs) > 1:
-        d = [duration(r) for r in runs]
-        i = int(np.argmin(d))
-        if d[i] >= min_duration:
-            break
-        left = runs[i - 1] if i > 0 else None
-        right = runs[i + 1] if i + 1 < len(runs) else None
-        if left is not None and right is not None and left[0] == right[0]:
-            new = left[0]
-        elif left is None or (right is not None and d[i + 1] > d[i - 1]):
-            new = right[0]
-        else:
-            new = left[0]
-        runs[i][0] = new
-        merged = [runs[0]]  # join neighbours that now share a label
-        for r in runs[1:]:
-            if r[0] == merged[-1][0]:
-                merged[-1] = [r[0], merged[-1][1], r[2]]
-            else:
-                merged.append(r)
-        runs = merged
-    return runs
 
 
 def segment_thermal(time, temperature, *, rate_threshold: float = 0.1 / 60.0,
@@ -108,8 +76,8 @@ def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60
                          gap_factor: float = GAP_FACTOR) -> list[list[Segment]]:
     """:func:`segment_thermal` of several sensors sampled at ``time``: (sensors, n) deg C.
 
-    The smoothed rates of all sensors come from one filter call; labels and merging are
-    per sensor.
+    The smoothed rates of all sensors come from one filter call; labels are merged and each
+    segment's mean and slope computed by compiled loops (:mod:`.segment_loops`).
     """
     t = check_time(time)
     T = np.asarray(temperatures, dtype=float)
@@ -125,10 +93,14 @@ def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60
     check_window(smooth_s, t, name="smooth_s")
     rates = temperature_rate(t, T, method="savgol", window_s=smooth_s, polyorder=1,
                              gap_factor=gap_factor)
-    out = []
-    for Ts, r in zip(T, rates):
-        labels = np.where(r > rate_threshold, 1, np.where(r < -rate_threshold, -1, 0))
-        out.append([Segment(_KINDS[lab], a, b, float(t[a]), float(t[b - 1]),
-                            float(Ts[a:b].mean()), ls_slope(t[a:b], Ts[a:b]))
-                    for lab, a, b in merge_short_runs(labels, t, float(min_duration))])
-    return out
+    labels = np.where(rates > rate_threshold, 1, np.where(rates < -rate_threshold, -1, 0))
+    end = np.r_[t[1:], t[-1] + median_step(t)] if t.size > 1 else t + 1.0
+    lab, start, stop, count = merge_runs(labels, t, end, float(min_duration))
+    R = int(count.max())
+    lab, start, stop = lab[:, :R], start[:, :R], stop[:, :R]
+    mean, slope = run_stats(T, t, start, stop, count)
+    lab, start, stop, mean, slope = (x.tolist() for x in (lab, start, stop, mean, slope))
+    tl = t.tolist()
+    return [[Segment(_KINDS[lab[s][k]], start[s][k], stop[s][k], tl[start[s][k]],
+                     tl[stop[s][k] - 1], mean[s][k], slope[s][k]) for k in range(c)]
+            for s, c in enumerate(count.tolist())]

@@ -1,0 +1,100 @@
+"""Compiled loops of the soak/ramp segmenter (Numba): run merging and per-segment statistics.
+
+:func:`merge_runs` is the merge rule of :mod:`.segments` for each row of a (sensors, n)
+label array, sensors in parallel::
+
+    duration(run) = end[last sample] - t[first sample]     (end[i] = t[i + 1], last + median step)
+    while there are 2+ runs and the shortest (first of equals) is shorter than min_duration:
+        its label becomes its neighbours' common label, or else the label of the longer
+        neighbour (the left one on a tie, the only one at an end);
+        neighbours that now share a label are joined
+
+:func:`run_stats` gives each segment's mean temperature and least-squares slope
+``sum (t - tbar)(T - Tbar) / sum (t - tbar)^2`` (0 for a single sample).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numba import prange
+
+
+@numba.njit(cache=True)
+def _merge_row(labels, t, end, min_duration, lab, start, stop):
+    """Runs of one label row merged in place into lab/start/stop; returns their number."""
+    n = labels.size
+    r = 0
+    lab[0], start[0] = labels[0], 0
+    for i in range(1, n):
+        if labels[i] != labels[i - 1]:
+            stop[r] = i
+            r += 1
+            lab[r], start[r] = labels[i], i
+    stop[r] = n
+    r += 1
+    d = np.empty(r)
+    while r > 1:
+        i = 0
+        for k in range(r):
+            d[k] = end[stop[k] - 1] - t[start[k]]
+            if d[k] < d[i]:
+                i = k
+        if d[i] >= min_duration:
+            break
+        if 0 < i < r - 1 and lab[i - 1] == lab[i + 1]:
+            lab[i] = lab[i - 1]
+        elif i == 0 or (i + 1 < r and d[i + 1] > d[i - 1]):
+            lab[i] = lab[i + 1]
+        else:
+            lab[i] = lab[i - 1]
+        w = 0  # join neighbours that now share a label
+        for k in range(1, r):
+            if lab[k] == lab[w]:
+                stop[w] = stop[k]
+            else:
+                w += 1
+                lab[w], start[w], stop[w] = lab[k], start[k], stop[k]
+        r = w + 1
+    return r
+
+
+@numba.njit(cache=True, parallel=True)
+def merge_runs(labels, t, end, min_duration):
+    """Merged runs of every row of labels (S, n): lab, start, stop (S, n) and count (S,)."""
+    S, n = labels.shape
+    lab = np.zeros((S, n), np.int64)
+    start = np.zeros((S, n), np.int64)
+    stop = np.zeros((S, n), np.int64)
+    count = np.zeros(S, np.int64)
+    for s in prange(S):
+        count[s] = _merge_row(labels[s], t, end, min_duration, lab[s], start[s], stop[s])
+    return lab, start, stop, count
+
+
+@numba.njit(cache=True, parallel=True)
+def run_stats(T, t, start, stop, count):
+    """Mean of T (S, n) and least-squares slope of T on t over each run: (S, R) each."""
+    S, R = start.shape
+    mean = np.zeros((S, R))
+    slope = np.zeros((S, R))
+    for s in prange(S):
+        for k in range(count[s]):
+            a, b = start[s, k], stop[s, k]
+            m = b - a
+            tb, yb = 0.0, 0.0
+            for i in range(a, b):
+                tb += t[i]
+                yb += T[s, i]
+            tb /= m
+            yb /= m
+            mean[s, k] = yb
+            if m < 2:
+                continue
+            sxy, sxx = 0.0, 0.0
+            for i in range(a, b):
+                dt = t[i] - tb
+                sxy += dt * (T[s, i] - yb)
+                sxx += dt * dt
+            slope[s, k] = sxy / sxx
+    return mean, slope
