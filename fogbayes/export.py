@@ -50,18 +50,23 @@ def basis_from_dict(d: dict, *, source: str | None = None) -> PolyBasis:
 
 
 def coefficient_document(basis: PolyBasis, coef, cov=None, *, units: dict | None = None,
-                         valid_range: dict | None = None) -> dict:
-    """JSON-able coefficients: scaled (exact) and raw (powers of the covariates, origin 0)."""
+                         valid_range: dict | None = None, raw=None) -> dict:
+    """JSON-able coefficients: scaled (exact) and raw (powers of the covariates, origin 0).
+
+    ``raw``: the raw coefficients (and covariance, with ``cov``) when already computed
+    (a fleet converts all its sensors at once with ``rebase_matrices``).
+    """
     coef = np.asarray(coef, dtype=float)
     doc = {"basis": basis_to_dict(basis), "coef": coef.tolist()}
     if cov is not None:
         cov = np.asarray(cov, dtype=float)
-        raw, raw_cov = to_raw(coef, basis, cov)
+        raw, raw_cov = to_raw(coef, basis, cov) if raw is None else raw
         doc.update(covariance=cov.tolist(), stderr=np.sqrt(np.diag(cov)).tolist())
         doc["raw"] = {"terms": basis.labels(), "coef": raw.tolist(),
                       "stderr": np.sqrt(np.clip(np.diag(raw_cov), 0, None)).tolist()}
     else:
-        doc["raw"] = {"terms": basis.labels(), "coef": to_raw(coef, basis).tolist()}
+        raw = to_raw(coef, basis) if raw is None else raw
+        doc["raw"] = {"terms": basis.labels(), "coef": np.asarray(raw).tolist()}
     doc["raw"]["form"] = "sum_k coef_k * prod_c covariate_c ** exponent_kc (origin 0)"
     if units:
         doc["units"] = dict(units)

@@ -29,7 +29,7 @@ def fleet():
 def test_covariates_blocks_and_segments_equal_the_workflow(fleet, rate_method):
     spec = ThermalSpec(2, 1)
     proc = make_processing("default", rate_method=rate_method)
-    zs = prepare.covariates(fleet, spec, proc)
+    zs = [z.T for z in prepare.covariates(fleet, spec, proc)]  # (c, n) each -> (n, c)
     rates = [r.rate("deg/h") for r in fleet]
     rng = np.random.default_rng(1)
     masks = [None, rng.random(fleet[1].n) < 0.05, None, np.zeros(fleet[3].n, bool), None]

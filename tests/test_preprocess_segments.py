@@ -206,7 +206,8 @@ def test_compiled_merge_equals_the_plain_rule(seed):
     labels = np.repeat(rng.integers(-1, 2, n), rng.integers(1, 40, n))[:n].reshape(1, n)
     labels = np.vstack([labels, rng.integers(-1, 2, (2, n))])  # and pure noise rows
     end = np.r_[t[1:], t[-1] + np.median(np.diff(t))]
-    lab, start, stop, count = merge_runs(labels, t, end, 30.0)
+    # labels -1/0/1 as rates against a threshold of 0.5
+    lab, start, stop, count = merge_runs(labels.astype(float), 0.5, t, end, 30.0)
     T = rng.normal(20.0, 1.0, labels.shape)
     mean, slope = run_stats(T, t, start, stop, count)
     for s in range(labels.shape[0]):

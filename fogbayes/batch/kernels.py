@@ -13,10 +13,12 @@ terms) design array that a batched XLA program has to stream through memory:
 
   a fit is ``ok`` when ``min diag L > rcond * max diag L`` (the QR path's rank test on
   ``R``, since ``diag L = |diag R|``) and ``m_s > p``;
-* :func:`evaluate` -- the modelled bias ``x(z_i) . b`` at every sample;
+* :func:`evaluate` -- the modelled bias ``x(z_i) . b`` at every sample (covariates clamped
+  to the fit's range, as compensation clamps them);
+* :func:`covariate_range` -- each sensor's covariate range over its blocks of weight > 0;
 * :func:`pauta` -- :func:`fogbayes.preprocess.pauta_flags` on each row: passes of
   ``|r_i - mean| > n_sigma * std_{n-1}`` over the samples not yet flagged, until a pass
-  flags nothing new;
+  flags nothing new (:func:`residual_pauta`: on the fit's residuals, formed on the fly);
 * :func:`masked_block_means` -- block means of rate and covariates without the flagged
   samples (:func:`fogbayes.preprocess.blocks.group_mean`'s definition, one shared clock).
 
@@ -33,50 +35,84 @@ import numba
 import numpy as np
 from numba import prange
 
+CHUNK = 256  # rows of the design built at a time: (p, CHUNK) stays in L1
+
 
 @numba.njit(cache=True, inline="always")
-def _row(z, s, i, centre, scale, exps, x):
-    """Monomials of sample i of sensor s (z (S, c, n)) in its scaled basis, into x (p,)."""
+def _monomials(z, s, i0, n, centre, scale, lo, hi, exps, X, u):
+    """Monomials of rows i0:i0+n of sensor s into X[:, :n]: each covariate clamped to
+    [lo_sj, hi_sj], scaled (z - centre) / scale into u, raised by repeated products."""
     p, c = exps.shape
     for k in range(p):
-        x[k] = 1.0
+        for r in range(n):
+            X[k, r] = 1.0
     for j in range(c):
-        u = (z[s, j, i] - centre[s, j]) / scale[s, j]
+        cj, sj, a, b = centre[s, j], scale[s, j], lo[s, j], hi[s, j]
+        for r in range(n):
+            u[r] = (min(max(z[s, j, i0 + r], a), b) - cj) / sj
         for k in range(p):
             for _ in range(exps[k, j]):  # integer powers by products (no pow call)
-                x[k] *= u
+                for r in range(n):
+                    X[k, r] *= u[r]
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, inline="always")
+def _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy):
+    """Rows i0:i0+n of sensor s: monomials into X[:, :n] and (weight, y) into wy[:2, :n]
+    (wy[2] is scratch); weight-0 rows (values may be NaN) become zeros: they add nothing."""
+    p = exps.shape[0]
+    _monomials(z, s, i0, n, centre, scale, lo, hi, exps, X, wy[2])
+    for r in range(n):
+        wr = w[s, i0 + r]
+        if wr == 0.0:  # an empty or padding block: not a row of this fit
+            wy[0, r] = 0.0
+            wy[1, r] = 0.0
+            for k in range(p):
+                X[k, r] = 0.0
+        else:
+            wy[0, r] = wr
+            wy[1, r] = y[s, i0 + r]
+
+
+@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
 def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
     """Weighted LSQ of every sensor. z (S, c, m), y, w (S, m), centre/scale (S, c),
     n_valid (S,) rows that count for the dof, exps (p, c) int. Rows of weight 0 are skipped
-    (their values may be NaN) and get a NaN residual.
+    (their values may be NaN).
 
-    Returns coef (S, p), cov (S, p, p), resid (S, m), s2 (S,), dof (S,), ok (S,) bool.
+    Returns coef (S, p), cov (S, p, p), rss (S,) (the unweighted residual sum of squares
+    over the rows of weight > 0, for the RMS criterion), s2 (S,), dof (S,), ok (S,) bool.
     """
     S, m = y.shape
     p = exps.shape[0]
+    lo = np.full(centre.shape, -np.inf)  # no clamping in the fit
+    hi = np.full(centre.shape, np.inf)
     coef = np.zeros((S, p))
     cov = np.zeros((S, p, p))
-    resid = np.zeros((S, m))
+    rss = np.zeros(S)
     s2 = np.zeros(S)
     dof = np.zeros(S)
     ok = np.zeros(S, np.bool_)
     for s in prange(S):
-        x = np.empty(p)
+        X = np.empty((p, CHUNK))
+        wy = np.empty((3, CHUNK))
+        wx = np.empty(CHUNK)
         G = np.zeros((p, p))
         g = np.zeros(p)
-        for i in range(m):
-            wi = w[s, i]
-            if wi == 0.0:  # an empty or padding block (NaN values): not a row of this fit
-                continue
-            _row(z, s, i, centre, scale, exps, x)
+        for i0 in range(0, m, CHUNK):
+            n = min(CHUNK, m - i0)
+            _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy)
             for a in range(p):
-                wxa = wi * x[a]
-                g[a] += wxa * y[s, i]
+                acc = 0.0
+                for r in range(n):
+                    wx[r] = wy[0, r] * X[a, r]
+                    acc += wx[r] * wy[1, r]
+                g[a] += acc
                 for b in range(a + 1):
-                    G[a, b] += wxa * x[b]
+                    acc = 0.0
+                    for r in range(n):
+                        acc += wx[r] * X[b, r]
+                    G[a, b] += acc
         L = np.zeros((p, p))  # Cholesky, lower
         good = True
         for a in range(p):
@@ -106,20 +142,22 @@ def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
         Ginv = Linv.T @ Linv
         beta = Ginv @ g
         wrss = 0.0
-        for i in range(m):
-            if w[s, i] == 0.0:
-                resid[s, i] = np.nan
-                continue
-            _row(z, s, i, centre, scale, exps, x)
-            f = 0.0
+        ss = 0.0
+        for i0 in range(0, m, CHUNK):
+            n = min(CHUNK, m - i0)
+            _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy)
+            for r in range(n):
+                wx[r] = wy[1, r]
             for a in range(p):
-                f += x[a] * beta[a]
-            r = y[s, i] - f
-            resid[s, i] = r
-            wrss += w[s, i] * r * r
+                for r in range(n):
+                    wx[r] -= X[a, r] * beta[a]
+            for r in range(n):
+                wrss += wy[0, r] * wx[r] * wx[r]
+                ss += wx[r] * wx[r]  # weight-0 rows have y = X = 0 here: they add 0
         d = n_valid[s] - p
         var = wrss / max(d, 1.0)
         coef[s] = beta
+        rss[s] = ss
         cov[s] = var * Ginv
         s2[s] = var
         dof[s] = d
@@ -127,24 +165,64 @@ def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
         for a in range(p):
             finite = finite and np.isfinite(beta[a])
         ok[s] = good and dmin > rcond * dmax and d > 0 and finite
-    return coef, cov, resid, s2, dof, ok
+    return coef, cov, rss, s2, dof, ok
 
 
-@numba.njit(cache=True, parallel=True)
-def evaluate(coef, z, centre, scale, exps):
-    """x(z_si) . b_s for every sensor s and sample i: coef (S, p), z (S, c, n) -> (S, n)."""
+@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
+def evaluate(coef, z, centre, scale, exps, lo, hi):
+    """x(clip(z_si, lo_s, hi_s)) . b_s for every sensor s and sample i: coef (S, p),
+    z (S, c, n), lo/hi (S, c) (pass -inf/inf not to clamp) -> (S, n)."""
     S, n = z.shape[0], z.shape[2]
     p = exps.shape[0]
     out = np.empty((S, n))
     for s in prange(S):
-        x = np.empty(p)
-        for i in range(n):
-            _row(z, s, i, centre, scale, exps, x)
-            f = 0.0
+        X = np.empty((p, CHUNK))
+        u = np.empty(CHUNK)
+        for i0 in range(0, n, CHUNK):
+            k = min(CHUNK, n - i0)
+            _monomials(z, s, i0, k, centre, scale, lo, hi, exps, X, u)
+            for r in range(k):
+                u[r] = 0.0
             for a in range(p):
-                f += x[a] * coef[s, a]
-            out[s, i] = f
+                for r in range(k):
+                    u[r] += X[a, r] * coef[s, a]
+            for r in range(k):
+                out[s, i0 + r] = u[r]
     return out
+
+
+@numba.njit(cache=True)
+def _pauta_row(r, mask, n_sigma, max_iter):
+    """``pauta_flags`` of one row r (n,): flags into mask (n,); (count, threshold, passes)."""
+    n = r.size
+    flagged, thr, passes = 0, np.inf, 0
+    for it in range(1, max_iter + 1):
+        passes = it
+        k = n - flagged
+        if k < 3:
+            break
+        tot = 0.0
+        for i in range(n):
+            if not mask[i]:
+                tot += r[i]
+        mean = tot / k
+        ss = 0.0
+        for i in range(n):
+            if not mask[i]:
+                d = r[i] - mean
+                ss += d * d
+        thr = n_sigma * np.sqrt(ss / (k - 1))
+        new = 0
+        for i in range(n):  # decide on the pass's own mean/threshold, then flag
+            if not mask[i] and abs(r[i] - mean) > thr:
+                new += 1
+        if new == 0:
+            break
+        for i in range(n):
+            if not mask[i] and abs(r[i] - mean) > thr:
+                mask[i] = True
+        flagged += new
+    return flagged, thr, passes
 
 
 @numba.njit(cache=True, parallel=True)
@@ -157,36 +235,36 @@ def pauta(r, n_sigma, max_iter):
     threshold = np.full(S, np.inf)
     passes = np.zeros(S, np.int64)
     for s in prange(S):
-        flagged = 0
-        for it in range(1, max_iter + 1):
-            passes[s] = it
-            k = n - flagged
-            if k < 3:
-                break
-            tot = 0.0
-            for i in range(n):
-                if not mask[s, i]:
-                    tot += r[s, i]
-            mean = tot / k
-            ss = 0.0
-            for i in range(n):
-                if not mask[s, i]:
-                    d = r[s, i] - mean
-                    ss += d * d
-            thr = n_sigma * np.sqrt(ss / (k - 1))
-            threshold[s] = thr
-            new = 0
-            for i in range(n):  # decide on the pass's own mean/threshold, then flag
-                if not mask[s, i] and abs(r[s, i] - mean) > thr:
-                    new += 1
-            if new == 0:
-                break
-            for i in range(n):
-                if not mask[s, i] and abs(r[s, i] - mean) > thr:
-                    mask[s, i] = True
-            flagged += new
-        count[s] = flagged
+        count[s], threshold[s], passes[s] = _pauta_row(r[s], mask[s], n_sigma, max_iter)
     return mask, count, threshold, passes
+
+
+@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
+def residual_pauta(y, coef, z, centre, scale, exps, n_sigma, max_iter):
+    """:func:`pauta` of the residuals ``y - x(z) . b`` of every sensor (y (S, n)), each
+    formed in a per-thread buffer: mask (S, n) and count (S,)."""
+    S, n = y.shape
+    p = exps.shape[0]
+    lo = np.full(centre.shape, -np.inf)
+    hi = np.full(centre.shape, np.inf)
+    mask = np.zeros((S, n), np.bool_)
+    count = np.zeros(S, np.int64)
+    for s in prange(S):
+        r = np.empty(n)
+        X = np.empty((p, CHUNK))
+        u = np.empty(CHUNK)
+        for i0 in range(0, n, CHUNK):
+            k = min(CHUNK, n - i0)
+            _monomials(z, s, i0, k, centre, scale, lo, hi, exps, X, u)
+            for q in range(k):
+                u[q] = y[s, i0 + q]
+            for a in range(p):
+                for q in range(k):
+                    u[q] -= X[a, q] * coef[s, a]
+            for q in range(k):
+                r[i0 + q] = u[q]
+        count[s] = _pauta_row(r, mask[s], n_sigma, max_iter)[0]
+    return mask, count
 
 
 @numba.njit(cache=True, parallel=True)
@@ -228,3 +306,57 @@ def masked_block_means(t, y, z, use, start, stop):
             for q in range(c):
                 zm[s, q, j] = acc[q] / k if k > 0 else np.nan
     return tm, ym, zm, cnt
+
+
+@numba.njit(cache=True, parallel=True)
+def stability(x, a, b, start, stop, offsets):
+    """Bias and bias stability of every row of x (S, n) on samples [a, b) (paper 004 eqs.
+    12-13): ``B0 = mean(x[a:b])`` and, per window w, ``Bs_w = std_{n-1}`` of the means of
+    the blocks ``[a + start_j, a + stop_j)`` for j in ``offsets[w]:offsets[w + 1]``.
+
+    Returns B0 (S,) and Bs (S, W) (NaN for a window of fewer than two blocks).
+    """
+    S = x.shape[0]
+    W = offsets.size - 1
+    b0 = np.empty(S)
+    bs = np.full((S, W), np.nan)
+    for s in prange(S):
+        tot = 0.0
+        for i in range(a, b):
+            tot += x[s, i]
+        b0[s] = tot / (b - a)
+        for w in range(W):
+            j0, j1 = offsets[w], offsets[w + 1]
+            k = j1 - j0
+            if k < 2:
+                continue
+            means = np.empty(k)
+            for j in range(k):
+                acc = 0.0
+                for i in range(a + start[j0 + j], a + stop[j0 + j]):
+                    acc += x[s, i]
+                means[j] = acc / (stop[j0 + j] - start[j0 + j])
+            m = means.sum() / k
+            ss = 0.0
+            for j in range(k):
+                ss += (means[j] - m) ** 2
+            bs[s, w] = np.sqrt(ss / (k - 1))
+    return b0, bs
+
+
+@numba.njit(cache=True, parallel=True)
+def covariate_range(z, w):
+    """Min and max of each covariate of z (S, c, m) over the rows with w (S, m) > 0."""
+    S, c, m = z.shape
+    lo = np.full((S, c), np.inf)
+    hi = np.full((S, c), -np.inf)
+    for s in prange(S):
+        for j in range(c):
+            a, b = np.inf, -np.inf
+            for i in range(m):
+                if w[s, i] > 0.0:
+                    v = z[s, j, i]
+                    a = min(a, v)
+                    b = max(b, v)
+            lo[s, j], hi[s, j] = a, b
+    return lo, hi

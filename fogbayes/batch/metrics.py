@@ -10,11 +10,11 @@ on the whole record and on each soak/ramp segment, before and after compensation
 What makes it fast is that a lab samples its gyros with one clock and soaks them in one
 chamber: many sensors share a time vector and the same segment bounds. The block layout of
 a (time vector, segment, window) is built once (:func:`fogbayes.preprocess.blocks.block_index`,
-the same function the single-sensor path uses) and every sensor that shares it gets its
-block sums from one reduction over a (sensors, samples) array (:func:`block_sums`: a reshape
-on a regular grid, ``numpy.add.reduceat`` otherwise). Sensors with a
-clock or segments of their own still work; they share less. Numbers equal the single-sensor
-path to rounding (block sums in a different order: ~1e-15 relative).
+the same function the single-sensor path uses) and one compiled loop over the sensors that
+share it (:func:`.kernels.stability`, sensors on all cores) gives B0 and every window's Bs.
+Sensors with a clock or segments of their own still work; they share less. Numbers equal the
+single-sensor path to rounding (sums in sample order rather than NumPy's pairwise order:
+~1e-15 relative).
 """
 
 from __future__ import annotations
@@ -26,23 +26,7 @@ import numpy as np
 from ..errors import TooShortError
 from ..metrics import DEFAULT_WINDOWS, improvement_pct
 from ..preprocess.blocks import block_index
-
-
-def block_sums(x: np.ndarray, start: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Row-wise sums of x (rows, n) over sample ranges [start_j, stop_j) (increasing)."""
-    length = stop - start
-    if length.size and np.all(length == length[0]) and np.all(start[1:] == stop[:-1]):
-        # a regular grid without gaps: equal, adjacent blocks are a reshape (no copy)
-        a, b = int(start[0]), int(stop[-1])
-        return x[:, a:b].reshape(x.shape[0], length.size, int(length[0])).sum(axis=2)
-    edges = np.column_stack([start, stop]).ravel()
-    padded = np.concatenate([x, np.zeros((x.shape[0], 1))], axis=1)  # reduceat needs stop < len
-    return np.add.reduceat(padded, edges, axis=1)[:, ::2]
-
-
-def block_means(x: np.ndarray, start: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Row-wise means of x over sample ranges [start_j, stop_j)."""
-    return block_sums(x, start, stop) / (stop - start)
+from . import kernels
 
 
 class _Layouts:
@@ -65,23 +49,20 @@ class _Layouts:
 def _report(before: np.ndarray, after: np.ndarray, t: np.ndarray, tkey, a: int, b: int,
             windows: Sequence[float], layouts: _Layouts) -> list[dict]:
     """stability_report of rows ``before``/``after`` (sensors x samples) on samples a:b."""
-    x = np.concatenate([before[:, a:b], after[:, a:b]])
     k = before.shape[0]
-    b0 = np.mean(x, axis=1)
-    rows = [[] for _ in range(k)]
-    for w in windows:
-        lay = layouts.get(tkey, t, a, b, float(w))
-        if lay is None:
-            continue
-        bs = np.std(block_means(x, *lay), axis=1, ddof=1).tolist()  # Python floats at once
-        for s in range(k):
-            bs_b, bs_a = bs[s], bs[k + s]
-            rows[s].append({"window_s": float(w), "before": bs_b, "after": bs_a,
-                            "improvement_pct": improvement_pct(bs_b, bs_a)})
+    lays = [(float(w), layouts.get(tkey, t, a, b, float(w))) for w in windows]
+    lays = [(w, lay) for w, lay in lays if lay is not None]
+    start = np.concatenate([lay[0] for _, lay in lays] or [np.zeros(0, np.int64)])
+    stop = np.concatenate([lay[1] for _, lay in lays] or [np.zeros(0, np.int64)])
+    offsets = np.cumsum([0] + [lay[0].size for _, lay in lays])
+    b0_b, bs_b = (v.tolist() for v in kernels.stability(before, a, b, start, stop, offsets))
+    b0_a, bs_a = (v.tolist() for v in kernels.stability(after, a, b, start, stop, offsets))
     duration = float(t[b - 1] - t[a])
-    b0 = b0.tolist()
-    return [{"bias_before": b0[s], "bias_after": b0[k + s],
-             "duration_s": duration, "stability": rows[s]} for s in range(k)]
+    return [{"bias_before": b0_b[s], "bias_after": b0_a[s], "duration_s": duration,
+             "stability": [{"window_s": w, "before": bs_b[s][j], "after": bs_a[s][j],
+                            "improvement_pct": improvement_pct(bs_b[s][j], bs_a[s][j])}
+                           for j, (w, _) in enumerate(lays)]}
+            for s in range(k)]
 
 
 def segment_reports(before: Sequence[np.ndarray], after: Sequence[np.ndarray],
@@ -111,14 +92,14 @@ def segment_reports(before: Sequence[np.ndarray], after: Sequence[np.ndarray],
     layouts = _Layouts()
     done: dict[tuple[int, int, int], dict] = {}
     for (tk, a, b), who in jobs.items():
-        idx = np.asarray(who)
-        reps = _report(before[idx], after[idx], times[who[0]], tk, a, b, windows, layouts)
+        rows = slice(None) if len(who) == S else np.asarray(who)  # all sensors: no copy
+        reps = _report(before[rows], after[rows], times[who[0]], tk, a, b, windows, layouts)
         for s, rep in zip(who, reps):
             done[(s, a, b)] = rep
     out = []
     for s in range(S):
         t = times[s]
-        full, *segs = plan[s]
+        _, *segs = plan[s]  # the full record's range is first
         out.append({"full": done[(s, 0, n)], "segments": [
             {"kind": g.kind, "start_s": float(t[a]), "stop_s": float(t[b - 1]), **done[(s, a, b)]}
             for a, b, g in segs]})

@@ -58,28 +58,44 @@ def _channel_index(rec, name: str) -> int | None:
     return 0 if name == "" else names.index(name)
 
 
-def covariates(recs, spec, proc) -> list[np.ndarray]:
-    """``sample_covariates`` of every recording (rates per clock group in one call).
+def covariates(recs, spec, proc, groups=None) -> np.ndarray:
+    """``sample_covariates`` of every recording (same length), covariate-major (S, c, n);
+    dT/dt per clock group in one call. ``groups``: :func:`clock_groups` of ``recs`` when
+    already known.
 
     A recording whose data the per-recording function rejects raises the same error.
     """
-    out: list[np.ndarray | None] = [None] * len(recs)
-    for group in clock_groups(recs):
+    out = None
+    for group in clock_groups(recs) if groups is None else groups:
         idx = [_channel_index(recs[i], spec.temperature) for i in group]
-        rates = None
         if spec.rate_order > 0 and len(group) > 1 and None not in idx:
             T = np.stack([recs[i].temperatures[:, k] for i, k in zip(group, idx)])
             rates = temperature_rate_of(recs[group[0]].time, T, method=proc.rate_method,
                                         window_s=proc.rate_window_s,
                                         gap_factor=proc.rate_gap_factor)
-        for j, i in enumerate(group):
-            rec = recs[i]
-            out[i] = (sample_covariates(rec, spec, proc) if rates is None else
-                      thermal_covariates(rec.time, rec.temperatures, rec.temperature_names, spec,
-                                         rate_method=proc.rate_method,
-                                         rate_window_s=proc.rate_window_s,
-                                         rate_gap_factor=proc.rate_gap_factor,
-                                         source=rec.meta.source, rate=rates[j]))
+            if not spec.extra and not spec.gradient:  # (T, dT/dt): thermal_covariates' columns
+                out = _into(out, len(recs), group, np.stack([T, rates], axis=1))
+                continue
+            zs = [thermal_covariates(recs[i].time, recs[i].temperatures,
+                                     recs[i].temperature_names, spec,
+                                     rate_method=proc.rate_method,
+                                     rate_window_s=proc.rate_window_s,
+                                     rate_gap_factor=proc.rate_gap_factor,
+                                     source=recs[i].meta.source, rate=rates[j])
+                  for j, i in enumerate(group)]
+        else:
+            zs = [sample_covariates(recs[i], spec, proc) for i in group]
+        out = _into(out, len(recs), group, covariate_major(zs))
+    return out
+
+
+def _into(out, S: int, rows, values: np.ndarray) -> np.ndarray:
+    """``out[rows] = values``, allocating out (S, c, n) on first use; all rows: no copy."""
+    if out is None and len(rows) == S and list(rows) == list(range(S)):
+        return values
+    if out is None:
+        out = np.empty((S,) + values.shape[1:])
+    out[rows] = values
     return out
 
 
@@ -87,8 +103,10 @@ class BlockArrays(NamedTuple):
     """Fit blocks of S recordings stacked: time, y (S, m), z (S, c, m), count (S, m).
 
     A block with count 0 (all its samples flagged, or padding after a shorter recording)
-    holds NaN and is not a block of that recording: ``fit_blocks`` drops it. Weighted by
-    its count it adds nothing to a fit, so the stacked fit equals the one without it.
+    is not a block of that recording (``fit_blocks`` drops it) and its values mean nothing
+    (NaN, or the left-out sample itself). Weighted by its count it adds nothing to a fit,
+    so the stacked fit equals the one without it; read the blocks through :meth:`of`, or
+    with ``count > 0``.
     """
 
     time: np.ndarray
@@ -103,7 +121,7 @@ class BlockArrays(NamedTuple):
                       np.ascontiguousarray(self.z[s][:, keep]).T, self.count[s, keep])
 
 
-def block_arrays(recs, rates, Z, spec, proc, use=None) -> BlockArrays:
+def block_arrays(recs, rates, Z, spec, proc, use=None, groups=None) -> BlockArrays:
     """Stacked ``fit_blocks(rec, rate, z, spec, proc, ~use)`` of every recording.
 
     ``rates`` (S, n) deg/h, ``Z`` (S, c, n) covariates (:func:`covariate_major`), ``use``
@@ -112,7 +130,7 @@ def block_arrays(recs, rates, Z, spec, proc, use=None) -> BlockArrays:
     S, n = rates.shape
     use = np.ones((S, n), bool) if use is None else np.asarray(use, bool)
     parts = []
-    for group in clock_groups(recs):
+    for group in clock_groups(recs) if groups is None else groups:
         if proc.mode == "paper" or len(group) == 1:
             for i in group:
                 b = fit_blocks(recs[i], rates[i], Z[i].T, spec, proc, ~use[i])
@@ -129,9 +147,6 @@ def block_arrays(recs, rates, Z, spec, proc, use=None) -> BlockArrays:
                 rows = slice(int(rows[0]), int(rows[-1]) + 1)
             tm = np.broadcast_to(t[rows], (g.size, bi.start.size))
             ym, zm, cnt = y[:, rows], z[:, :, rows], u[:, rows].astype(np.int64)
-            if not u.all():  # left-out samples are empty blocks
-                ym = np.where(cnt > 0, ym, np.nan)
-                zm = np.where(cnt[:, None, :] > 0, zm, np.nan)
         else:
             tm, ym, zm, cnt = kernels.masked_block_means(t, y, z, u, bi.start, bi.stop)
         parts.append((group, tm, ym, zm, cnt))
@@ -172,12 +187,12 @@ def blocks(recs, rates, zs, spec, proc, masks=None) -> list[Blocks]:
     return [arrays.of(s) for s in range(len(recs))]
 
 
-def segments(recs, temperatures) -> list[list]:
+def segments(recs, temperatures, groups=None) -> list[list]:
     """``thermal_segments(rec, z)`` of every recording, from the fit's temperature
     covariate ``z[:, 0]`` of each (``temperatures``: (S, n) or one (n,) per recording); one
     filter call per clock group."""
     out: list[list | None] = [None] * len(recs)
-    for group in clock_groups(recs):
+    for group in clock_groups(recs) if groups is None else groups:
         try:
             rows = segment_thermal_rows(recs[group[0]].time,
                                         np.stack([temperatures[i] for i in group]))

@@ -29,7 +29,6 @@ Example:
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Sequence
 from functools import lru_cache
 from math import comb
@@ -150,20 +149,39 @@ def rebase_matrix(basis: PolyBasis, origin: Sequence[float] | None = None,
     ``z' = a u + b`` (``a = unit / scale``, ``b = (origin - centre) / scale``) each factor
     expands as ``(a u + b)^e = sum_j C(e, j) a^j b^(e-j) u^j``.
     """
-    nc = len(basis.names)
+    return rebase_matrices(basis.terms, np.asarray([basis.centre]), np.asarray([basis.scale]),
+                           origin, unit)[0]
+
+
+@lru_cache(maxsize=64)
+def _expansion(terms: tuple[tuple[int, ...], ...]) -> list[tuple[int, int, tuple]]:
+    """(row, column, ((c, C(e_c, j_c), j_c, e_c - j_c), ...)) for each monomial u^j in the
+    binomial expansion of each scaled monomial z'^e (row = index of j, column = index of e)."""
+    index = {e: k for k, e in enumerate(terms)}
+    return [(index[j], k, tuple((c, comb(ec, jc), jc, ec - jc)
+                                for c, (ec, jc) in enumerate(zip(e, j))))
+            for k, e in enumerate(terms)
+            for j in itertools.product(*(range(ec + 1) for ec in e))]
+
+
+def rebase_matrices(terms, centre, scale, origin=None, unit=None) -> np.ndarray:
+    """:func:`rebase_matrix` of many bases with the same ``terms`` at once: ``centre`` and
+    ``scale`` (S, c) -> M (S, p, p) (a fleet's sensors each have their own scaling)."""
+    centre = np.asarray(centre, dtype=float)
+    scale = np.asarray(scale, dtype=float)
+    S, nc = centre.shape
     origin = np.zeros(nc) if origin is None else np.asarray(origin, dtype=float)
     unit = np.ones(nc) if unit is None else np.asarray(unit, dtype=float)
-    # Python floats: a fleet builds one such small matrix per sensor (numpy scalars cost
-    # ~10x more per operation here)
-    a = (unit / np.asarray(basis.scale)).tolist()
-    b = ((origin - np.asarray(basis.centre)) / np.asarray(basis.scale)).tolist()
-    index = {e: k for k, e in enumerate(basis.terms)}
-    M = np.zeros((basis.n_terms, basis.n_terms))
-    for k, e in enumerate(basis.terms):
-        for j in itertools.product(*(range(ec + 1) for ec in e)):
-            w = math.prod(comb(ec, jc) * a[c] ** jc * b[c] ** (ec - jc)
-                          for c, (ec, jc) in enumerate(zip(e, j)))
-            M[index[j], k] += w
+    a = unit / scale  # (S, c)
+    b = (origin - centre) / scale
+    terms = tuple(tuple(int(x) for x in e) for e in terms)
+    M = np.zeros((S, len(terms), len(terms)))
+    for row, col, factors in _expansion(terms):
+        w = np.ones(S)
+        for c, binom, j, rest in factors:
+            if j or rest:
+                w = w * (binom * a[:, c] ** j * b[:, c] ** rest)
+        M[:, row, col] += w
     return M
 
 

@@ -1,7 +1,8 @@
 """Compiled loops of the soak/ramp segmenter (Numba): run merging and per-segment statistics.
 
-:func:`merge_runs` is the merge rule of :mod:`.segments` for each row of a (sensors, n)
-label array, sensors in parallel::
+:func:`merge_runs` labels each sample by its smoothed rate (1 above ``threshold``, -1
+below ``-threshold``, else 0) and applies the merge rule of :mod:`.segments` to each row of
+a (sensors, n) rate array, sensors in parallel::
 
     duration(run) = end[last sample] - t[first sample]     (end[i] = t[i + 1], last + median step)
     while there are 2+ runs and the shortest (first of equals) is shorter than min_duration:
@@ -20,17 +21,26 @@ import numpy as np
 from numba import prange
 
 
+@numba.njit(cache=True, inline="always")
+def _label(rate, threshold):
+    """1 (ramp up), -1 (ramp down) or 0 (soak; also a NaN rate)."""
+    return 1 if rate > threshold else (-1 if rate < -threshold else 0)
+
+
 @numba.njit(cache=True)
-def _merge_row(labels, t, end, min_duration, lab, start, stop):
-    """Runs of one label row merged in place into lab/start/stop; returns their number."""
-    n = labels.size
+def _merge_row(rates, threshold, t, end, min_duration, lab, start, stop):
+    """Runs of one row's labels merged in place into lab/start/stop; returns their number."""
+    n = rates.size
     r = 0
-    lab[0], start[0] = labels[0], 0
+    prev = _label(rates[0], threshold)
+    lab[0], start[0] = prev, 0
     for i in range(1, n):
-        if labels[i] != labels[i - 1]:
+        cur = _label(rates[i], threshold)
+        if cur != prev:
             stop[r] = i
             r += 1
-            lab[r], start[r] = labels[i], i
+            lab[r], start[r] = cur, i
+            prev = cur
     stop[r] = n
     r += 1
     d = np.empty(r)
@@ -59,21 +69,21 @@ def _merge_row(labels, t, end, min_duration, lab, start, stop):
     return r
 
 
-@numba.njit(cache=True, parallel=True)
-def merge_runs(labels, t, end, min_duration):
-    """Merged runs of every row of labels (S, n): lab, start, stop (S, n) and count (S,)."""
-    S, n = labels.shape
+def _merge_runs(rates, threshold, t, end, min_duration):
+    """Merged runs of the labels of every row of rates (S, n): lab, start, stop (S, n) and
+    count (S,)."""
+    S, n = rates.shape
     lab = np.zeros((S, n), np.int64)
     start = np.zeros((S, n), np.int64)
     stop = np.zeros((S, n), np.int64)
     count = np.zeros(S, np.int64)
     for s in prange(S):
-        count[s] = _merge_row(labels[s], t, end, min_duration, lab[s], start[s], stop[s])
+        count[s] = _merge_row(rates[s], threshold, t, end, min_duration, lab[s], start[s],
+                              stop[s])
     return lab, start, stop, count
 
 
-@numba.njit(cache=True, parallel=True)
-def run_stats(T, t, start, stop, count):
+def _run_stats(T, t, start, stop, count):
     """Mean of T (S, n) and least-squares slope of T on t over each run: (S, R) each."""
     S, R = start.shape
     mean = np.zeros((S, R))
@@ -98,3 +108,21 @@ def run_stats(T, t, start, stop, count):
                 sxx += dt * dt
             slope[s, k] = sxy / sxx
     return mean, slope
+
+
+def _on_threads_when_many(fn, min_rows: int = 8):
+    """``fn`` compiled twice: serial for a few rows (a thread team's wake-up, ~1-2 ms, would
+    cost more than one row's work, as in the single-recording workflow), parallel over rows
+    for a fleet."""
+    serial = numba.njit(cache=True)(fn)
+    parallel = numba.njit(cache=True, parallel=True)(fn)
+
+    def call(rows, *args):
+        return (parallel if rows.shape[0] >= min_rows else serial)(rows, *args)
+
+    call.__doc__, call.__name__ = fn.__doc__, fn.__name__.lstrip("_")
+    return call
+
+
+merge_runs = _on_threads_when_many(_merge_runs)
+run_stats = _on_threads_when_many(_run_stats)

@@ -93,9 +93,9 @@ def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60
     check_window(smooth_s, t, name="smooth_s")
     rates = temperature_rate(t, T, method="savgol", window_s=smooth_s, polyorder=1,
                              gap_factor=gap_factor)
-    labels = np.where(rates > rate_threshold, 1, np.where(rates < -rate_threshold, -1, 0))
     end = np.r_[t[1:], t[-1] + median_step(t)] if t.size > 1 else t + 1.0
-    lab, start, stop, count = merge_runs(labels, t, end, float(min_duration))
+    lab, start, stop, count = merge_runs(rates, float(rate_threshold), t, end,
+                                         float(min_duration))
     R = int(count.max())
     lab, start, stop = lab[:, :R], start[:, :R], stop[:, :R]
     mean, slope = run_stats(T, t, start, stop, count)

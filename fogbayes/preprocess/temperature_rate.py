@@ -28,8 +28,11 @@ least-squares slope over its samples (0 for a lone sample).
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
+from scipy.fft import set_workers
 from scipy.signal import fftconvolve, savgol_coeffs, savgol_filter
 
 from ..errors import ArgumentError, NonFiniteError, ShapeError
@@ -188,8 +191,9 @@ def savgol_slope_grid(y: np.ndarray, w: int, p: int, delta: float,
     n, h = y.shape[-1], w // 2
     out = np.empty(y.shape)
     kernel = savgol_coeffs(w, p, deriv=1, delta=delta, use="conv")
-    out[..., h:n - h] = fftconvolve(y0, kernel.reshape((1,) * (y.ndim - 1) + (w,)),
-                                    mode="valid", axes=-1)
+    with set_workers(os.cpu_count() or 1):  # rows are independent transforms: all cores
+        out[..., h:n - h] = fftconvolve(y0, kernel.reshape((1,) * (y.ndim - 1) + (w,)),
+                                        mode="valid", axes=-1)
     u = (np.arange(w) - h) / h  # scaled positions in an edge window
     poly = np.polynomial.polynomial
     for win, pos in ((slice(0, w), slice(0, h)), (slice(n - w, n), slice(n - h, n))):
