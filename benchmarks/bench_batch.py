@@ -7,7 +7,7 @@
 quadratic bias in T and its own noise), model ``thermal`` (2, 2) on 1 s block means
 (5 coefficients, 3 600 blocks per hour). Times, best of 3 after a warm-up:
 
-1. the batched least-squares stage (:func:`fogbayes.batch.vectorized.batched_solver`): one
+1. the batched least-squares stage (:func:`fogbayes.batch.xla.batched_solver`): one
    ``jit(vmap)`` call over all sensors, against a Python loop over the same jitted
    single-sensor solve (inputs already on the device), for both solvers;
 2. the compiled CPU stage (:func:`fogbayes.batch.kernels.fit_gram`, sensors on all
@@ -41,12 +41,8 @@ import numpy as np
 
 import fogbayes
 from fogbayes.batch import fit_vectorized, kernels, run_batch
-from fogbayes.batch.vectorized import (
-    _exponents,
-    _solve_one,
-    _unit_basis,
-    batched_solver,
-)
+from fogbayes.batch.vectorized import _exponents
+from fogbayes.batch.xla import batched_solver, solve_one, unit_basis
 from fogbayes.data.io import save
 from fogbayes.models.thermal import ThermalSpec, thermal_basis
 from fogbayes.simulate.scenarios import simulate
@@ -98,7 +94,7 @@ def vector(args) -> dict:
              np.array([bs.centre for bs in bases]), np.array([bs.scale for bs in bases]),
              np.full(len(blocks), float(blocks[0].y.size))]
     dev = [jnp.asarray(a) for a in stack]
-    unit = _unit_basis(bases[0])
+    unit = unit_basis(bases[0])
     out = {"sensors": args.sensors, "blocks_per_sensor": int(blocks[0].y.size),
            "n_params": unit.n_terms, "simulate_s": t_sim, "prepare_blocks_s": t_prep}
     for solver in ("gram", "qr"):
@@ -107,7 +103,7 @@ def vector(args) -> dict:
         jax.block_until_ready(vm(*dev))
         t_compile = time.perf_counter() - t
         t_vm, res_vm = best(lambda vm=vm: vm(*dev))
-        one = jax.jit(partial(_solve_one, unit=unit, solver=solver))
+        one = jax.jit(partial(solve_one, unit=unit, solver=solver))
         per = [[a[s] for a in dev] for s in range(args.sensors)]  # on the device already
         t_loop, res_loop = best(lambda one=one, per=per: [one(*p)[0] for p in per])
         diff = float(np.max(np.abs(np.asarray(res_vm[0]) - np.stack(res_loop))))

@@ -1,57 +1,47 @@
-"""``bias-t`` / ``thermal`` fits of many same-shape recordings with one vmapped solve.
+"""``bias-t`` / ``thermal`` fits of many same-shape recordings in one batched pass.
 
-What is vectorised, and what is not (honestly): the workflow
-(:func:`fogbayes.workflow.thermal.fit_recording`) is
+The per-recording workflow (:func:`fogbayes.workflow.thermal.fit_recording`) is
 
-1. covariates per sample and 1 s block means (NumPy, data-dependent gaps and masks),
+1. covariates per sample and 1 s block means (data-dependent gaps and masks),
 2. order choice (only when several orders are asked for),
 3. closed-form weighted least squares in the scaled basis,
 4. 3-sigma (Pauta) flags on the per-sample residuals, iterated until none is new,
 5. refit on the block means without the flagged samples, metrics per soak/ramp segment.
 
-Steps 3 and 4's residual are one ``jax.jit(jax.vmap(...))`` call each over all sensors.
-Steps 1, 5's block means and the metrics run once per *clock group* (recordings with identical
-time stamps, as a rig's sensors have) on (sensors, samples) arrays (:mod:`.prepare`,
-:mod:`.metrics`: one 2-D Savitzky-Golay call, block layouts built once, one reduction over
-all sensors). What stays per recording: the Pauta iteration count, segment merging, and the
-document itself. Order choice is not vectorised: ``orders`` must name one order. The solve,
-per sensor ``s``::
+Here every step runs once for all sensors. Steps 1 and 5's block means, segments and
+metrics run once per *clock group* (recordings with identical time stamps, as a rig's
+sensors have) on stacked (sensors, samples) arrays (:mod:`.prepare`, :mod:`.metrics`: one
+2-D Savitzky-Golay call, block layouts built once). Steps 3-4 are one call each over all
+sensors: on a CPU the compiled loops of :mod:`.kernels` (``solver="numba"``, sensors on all
+cores, the design never stored), on a GPU/TPU the ``jit(vmap)`` programs of :mod:`.xla`
+(``"gram"``; ``"qr"``: the workflow's own QR). Per sensor ``s``::
 
     z'_s = (z_s - centre_s) / scale_s                (the sensor's own scaled basis)
     b_s  = argmin_b sum_i w_si (y_si - X(z'_si) b)^2  (w = samples per block)
 
-Sensors with fewer blocks are padded with rows of weight 0 (they change no sum); the
+Blocks are stacked with their counts as weights; an empty block (all its samples flagged)
+or padding weighs 0 and changes no sum, so the stacked fit equals the one without it. The
 residual variance uses each sensor's own ``m_s - p`` degrees of freedom, as the workflow
-does. ``solver="gram"`` (default) uses the normal equations
-(:func:`fogbayes.inference.lsq.lstsq_gram`, the batch path on CPU; same numbers as QR to
-~1e-12 in a scaled basis; 1.4x faster than batched QR on CPU), ``"qr"`` the workflow's own
-:func:`~fogbayes.inference.lsq.lstsq`. The documents equal the per-recording workflow's to
-~1e-9 relative (tests/test_batch.py; measured 2e-14).
+does. Order choice is not vectorised: ``orders`` must name one order. The documents equal
+the per-recording workflow's to ~1e-9 relative (tests/test_batch.py; measured 1e-14).
 
-Speed (benchmarks/RESULTS_batch.md, 1 000 sensors x 3 600 samples, 2-core CPU, idle):
-7.0x a loop of the per-recording workflow (1.25 s against 8.8 s), same coefficients to
-2e-14. The batched solve alone is *not* faster than a Python loop over the same jitted
-single-sensor solve on CPU (0.5-0.6x: memory-bound, and the loop's dispatch is cheap); it is
-the program that would run as it is on a GPU.
+Speed (benchmarks/RESULTS_batch.md, 1 000 sensors x 3 600 samples, 2-core CPU, idle): about
+20x a loop of the per-recording workflow with the compiled loops (12x with the XLA
+program), same coefficients to 1e-14.
 """
 
 from __future__ import annotations
 
-import gc
 from collections.abc import Callable
-from contextlib import contextmanager
-from functools import lru_cache, partial
+from functools import lru_cache
 from typing import NamedTuple
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..errors import FogbayesError, TooShortError
-from ..export import coefficient_document
-from ..inference.lsq import lstsq, lstsq_gram
 from ..metrics import DEFAULT_WINDOWS
-from ..models.polynomial import PolyBasis, design, range_scaling, rebase_matrices
+from ..models.polynomial import PolyBasis, range_scaling
 from ..models.thermal import covariate_names, thermal_terms
 from ..workflow._thermal_data import (
     Processing,
@@ -64,11 +54,11 @@ from ..workflow.thermal import (
     model_spec,
     parse_orders,
 )
-from . import kernels, prepare
+from . import kernels, prepare, xla
+from .documents import cyclic_gc_paused, fit_documents
 from .files import FleetError
 from .metrics import segment_reports
 
-SOLVERS = {"gram": lstsq_gram, "qr": lstsq}  # the jit(vmap) programs; "numba": .kernels
 RCOND = 1e-10  # rank test of the solvers (inference.lsq's default)
 _UNSUPPORTED = ("order_criterion", "noise", "ar_order", "ma_order", "num_warmup",
                 "num_samples", "num_chains", "level", "bayes_average_s")
@@ -77,37 +67,6 @@ _UNSUPPORTED = ("order_criterion", "noise", "ar_order", "ma_order", "num_warmup"
 def default_solver() -> str:
     """Compiled loops over sensors on a CPU; the jit(vmap) normal equations on a GPU/TPU."""
     return "numba" if jax.default_backend() == "cpu" else "gram"
-
-
-def _unit_basis(basis: PolyBasis) -> PolyBasis:
-    """The same monomials with centre 0 and scale 1: applied to already-scaled covariates."""
-    c = len(basis.names)
-    return PolyBasis(basis.names, basis.terms, (0.0,) * c, (1.0,) * c)
-
-
-def _solve_one(z, y, w, centre, scale, n_valid, *, unit: PolyBasis, solver: str):
-    """One sensor's weighted LSQ in its own scaled basis; dof from its own block count."""
-    X = design((z - centre) / scale, unit)
-    fit = SOLVERS[solver](X, y, w)
-    dof = n_valid - unit.n_terms
-    s2 = 2.0 * fit.loss / jnp.maximum(dof, 1.0)  # loss = wRSS / 2; padded rows add nothing
-    cov = jnp.where(fit.sigma2 > 0, fit.covariance * (s2 / fit.sigma2), fit.covariance)
-    return fit.params, cov, fit.residual, s2, dof, fit.converged & (dof > 0)
-
-
-def _bias_one(coef, z, centre, scale, *, unit: PolyBasis):
-    return design((z - centre) / scale, unit) @ coef
-
-
-@lru_cache(maxsize=32)
-def batched_solver(unit: PolyBasis, solver: str = "gram"):
-    """``jit(vmap(solve))`` over sensors for one model structure (compiled once per shape)."""
-    return jax.jit(jax.vmap(partial(_solve_one, unit=unit, solver=solver)))
-
-
-@lru_cache(maxsize=32)
-def batched_bias(unit: PolyBasis):
-    return jax.jit(jax.vmap(partial(_bias_one, unit=unit)))
 
 
 def _prepare(rec, spec, proc) -> tuple:
@@ -188,14 +147,8 @@ def _fit(arrays: prepare.BlockArrays, spec, solver: str
     if solver == "numba":
         fits = Fits(*kernels.fit_gram(arrays.z, arrays.y, w, centre, scale, n_valid,
                                       _exponents(bases[0]), RCOND))
-    else:  # XLA multiplies the weight-0 rows too: give them finite values
-        empty = w == 0
-        z = np.where(empty[:, None, :], centre[:, :, None], arrays.z).transpose(0, 2, 1)
-        y = np.where(empty, 0.0, arrays.y)
-        coef, cov, resid, *rest = (np.asarray(a) for a in batched_solver(
-            _unit_basis(bases[0]), solver)(*(jnp.asarray(a) for a in (z, y, w, centre, scale,
-                                                                      n_valid))))
-        fits = Fits(coef, cov, np.sum(np.where(empty, 0.0, resid) ** 2, axis=1), *rest)
+    else:
+        fits = Fits(*xla.fit(arrays.z, arrays.y, w, centre, scale, n_valid, bases[0], solver))
     return bases, lo, hi, fits
 
 
@@ -244,7 +197,7 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     if not recs:
         return []
     solver = default_solver() if solver is None else solver
-    if solver not in ("numba", *SOLVERS):
+    if solver not in ("numba", *xla.SOLVERS):
         raise FogbayesError(f"unknown solver {solver!r}", column="solver",
                             fix="use 'numba' (CPU), 'gram' or 'qr' (jit(vmap), any device)")
     groups = prepare.clock_groups(recs)  # a rig's sensors share one clock: work per group
@@ -269,10 +222,9 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     good = [recs[i] for i in keep]
     bases, lo, hi, fits = _fit(arrays, spec, solver)
     block_count = arrays.count
-    counts = [None] * len(good)
+    count = None  # Pauta-flagged samples per sensor
     if proc.outliers == "pauta":
         mask, count = _flags(solver, R, fits.coef, Z, bases, proc.n_sigma)
-        counts = count.tolist()
         redo = np.flatnonzero(count)
         if redo.size:  # refit the flagged sensors on block means without their flagged samples
             new = prepare.block_arrays([good[s] for s in redo], R[redo], Z[redo], spec, proc,
@@ -287,43 +239,14 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
                            _replace_counts(block_count, redo, new.count))
     # compensated output for the metrics, covariates clamped as compensation clamps them
     after = R - _bias(solver, fits.coef, Z, bases, lo, hi)
-    with _cyclic_gc_paused():  # thousands of small acyclic dicts: no cycle hunting
+    with cyclic_gc_paused():  # thousands of small acyclic dicts: no cycle hunting
         metrics = segment_reports(R, after, [r.time for r in good],
                                   prepare.segments(good, Z[:, 0, :], groups), windows=windows)
-        version = fogbayes.__version__
-        M = rebase_matrices(bases[0].terms, [b.centre for b in bases], [b.scale for b in bases])
-        raw = np.einsum("spq,sq->sp", M, fits.coef)
-        raw_cov = M @ fits.cov @ M.transpose(0, 2, 1)
-        s2, dof, ok = fits.s2.tolist(), fits.dof.tolist(), fits.ok.tolist()
-        n_blocks = (block_count > 0).sum(axis=1)
-        p = bases[0].n_terms
-        with np.errstate(divide="ignore"):  # paper 000 eq. 11; inf without degrees of freedom
-            rms = np.where(n_blocks > p, np.sqrt(fits.rss / (n_blocks - p)), np.inf).tolist()
-        n_blocks = n_blocks.tolist()
-        lo, hi = lo.tolist(), hi.tolist()
-        for s, rec in enumerate(good):
-            valid = dict(zip(bases[s].names, zip(lo[s], hi[s])))
-            out[keep[s]] = _document(rec, model, spec, proc, bases[s], n_blocks[s], valid,
-                                     fits.coef[s], fits.cov[s], (raw[s], raw_cov[s]), rms[s], s2[s],
-                                     dof[s], bool(ok[s]), counts[s], metrics[s], version)
+        docs = fit_documents(good, model, spec, proc, bases, fits, lo, hi,
+                             (block_count > 0).sum(axis=1), count, metrics, fogbayes.__version__)
+    for k, doc in zip(keep, docs):
+        out[k] = doc
     return out
-
-
-@contextmanager
-def _cyclic_gc_paused():
-    """Pause Python's cyclic garbage collector (reference counting still frees everything).
-
-    Building a fleet's documents allocates ~10^5 small containers; each 700 allocations
-    trigger a collection and the older generations' scans grow with the heap: ~0.1 s per
-    1 000 sensors (measured) for structures that hold no reference cycles.
-    """
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was:
-            gc.enable()
 
 
 def _replace_counts(count: np.ndarray, rows: np.ndarray, new: np.ndarray) -> np.ndarray:
@@ -345,11 +268,7 @@ def _bias(solver: str, coef: np.ndarray, Z: np.ndarray, bases: list, lo=None, hi
         inf = np.full(centre.shape, np.inf)
         return kernels.evaluate(coef, Z, centre, scale, _exponents(bases[0]),
                                 -inf if lo is None else lo, inf if hi is None else hi)
-    if lo is not None:
-        Z = np.clip(Z, lo[:, :, None], hi[:, :, None])
-    return np.asarray(batched_bias(_unit_basis(bases[0]))(
-        jnp.asarray(coef), jnp.asarray(Z.transpose(0, 2, 1)), jnp.asarray(centre),
-        jnp.asarray(scale)))
+    return xla.bias(coef, Z, centre, scale, bases[0], lo, hi)
 
 
 def _flags(solver: str, R: np.ndarray, coef: np.ndarray, Z: np.ndarray, bases: list,
@@ -367,29 +286,3 @@ def _flags(solver: str, R: np.ndarray, coef: np.ndarray, Z: np.ndarray, bases: l
 
 def _exponents(basis: PolyBasis) -> np.ndarray:
     return np.array(basis.terms, np.int64).reshape(basis.n_terms, len(basis.names))
-
-
-def _document(rec, model, spec, proc, basis, n_blocks, valid, coef, cov, raw, rms, s2, dof,
-              ok, n_flagged, metrics, version) -> dict:
-    """The fields of ``fit_recording``'s document (same keys, same order), from this solve."""
-    warnings = [] if ok else [(
-        "the design is rank deficient: some covariate does not vary enough (e.g. dT/dt in a "
-        "record without ramps); coefficients are not identified")]
-    return {
-        "model": model, "fogbayes_version": version, "converged": ok, "warnings": warnings,
-        "input": {"source": rec.meta.source, "sensor_id": rec.meta.sensor_id, "unit": rec.unit,
-                  "scale_factor": rec.scale_factor, "n": rec.n},
-        "params": {"spec": spec._asdict(), **coefficient_document(
-            basis, coef, cov, units={"output": "deg/h", "T": "degC", "dT/dt": "degC/min"},
-            valid_range=valid, raw=raw)},
-        "processing": proc._asdict(),
-        "outliers": {"method": proc.outliers, "n_sigma": proc.n_sigma,
-                     "count": 0 if n_flagged is None else n_flagged},
-        "fit": {"n_blocks": n_blocks, "n_params": basis.n_terms,
-                "rms_criterion": rms,
-                "residual_std": float(np.sqrt(s2)), "dof": int(dof),
-                "stderr_note": "least-squares standard errors assume white block means; "
-                               "see 'bayes' for intervals with AR noise"},
-        "metrics": metrics,
-        "vectorized": True,
-    }

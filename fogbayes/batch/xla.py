@@ -1,0 +1,80 @@
+"""The vectorised fit's least squares and bias as ``jax.jit(jax.vmap(...))`` programs.
+
+The same equations as the compiled CPU loops of :mod:`.kernels`, as one XLA program over
+all sensors: the path a GPU or TPU runs (``solver="gram"``, the default there), and the
+workflow's own QR solver (``"qr"``) for comparison. Per sensor ``s``::
+
+    z'_s = (z_s - centre_s) / scale_s                (the sensor's own scaled basis)
+    b_s  = argmin_b sum_i w_si (y_si - X(z'_si) b)^2  (w = samples per block)
+
+``"gram"`` solves the normal equations (:func:`fogbayes.inference.lsq.lstsq_gram`; same
+numbers as QR to ~1e-12 in a scaled basis), ``"qr"`` uses
+:func:`~fogbayes.inference.lsq.lstsq`. XLA multiplies every row, so rows of weight 0 (empty
+blocks, padding) are given finite values here; the residual variance uses each sensor's
+own ``m_s - p`` degrees of freedom, as the workflow does. On a CPU these programs are
+slower than a loop over sensors (memory-bound: benchmarks/RESULTS_batch.md).
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache, partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..inference.lsq import lstsq, lstsq_gram
+from ..models.polynomial import PolyBasis, design
+
+SOLVERS = {"gram": lstsq_gram, "qr": lstsq}
+
+
+def unit_basis(basis: PolyBasis) -> PolyBasis:
+    """The same monomials with centre 0 and scale 1: applied to already-scaled covariates."""
+    c = len(basis.names)
+    return PolyBasis(basis.names, basis.terms, (0.0,) * c, (1.0,) * c)
+
+
+def solve_one(z, y, w, centre, scale, n_valid, *, unit: PolyBasis, solver: str):
+    """One sensor's weighted LSQ in its own scaled basis; dof from its own block count."""
+    X = design((z - centre) / scale, unit)
+    fit = SOLVERS[solver](X, y, w)
+    dof = n_valid - unit.n_terms
+    s2 = 2.0 * fit.loss / jnp.maximum(dof, 1.0)  # loss = wRSS / 2; padded rows add nothing
+    cov = jnp.where(fit.sigma2 > 0, fit.covariance * (s2 / fit.sigma2), fit.covariance)
+    return fit.params, cov, fit.residual, s2, dof, fit.converged & (dof > 0)
+
+
+def _bias_one(coef, z, centre, scale, *, unit: PolyBasis):
+    return design((z - centre) / scale, unit) @ coef
+
+
+@lru_cache(maxsize=32)
+def batched_solver(unit: PolyBasis, solver: str = "gram"):
+    """``jit(vmap(solve))`` over sensors for one model structure (compiled once per shape)."""
+    return jax.jit(jax.vmap(partial(solve_one, unit=unit, solver=solver)))
+
+
+@lru_cache(maxsize=32)
+def batched_bias(unit: PolyBasis):
+    return jax.jit(jax.vmap(partial(_bias_one, unit=unit)))
+
+
+def fit(z, y, w, centre, scale, n_valid, basis: PolyBasis, solver: str) -> tuple:
+    """``kernels.fit_gram``'s results from the XLA program: z (S, c, m), y, w (S, m),
+    centre/scale (S, c), n_valid (S,) -> coef, cov, rss, s2, dof, ok."""
+    empty = w == 0
+    zf = np.where(empty[:, None, :], centre[:, :, None], z).transpose(0, 2, 1)
+    yf = np.where(empty, 0.0, y)
+    coef, cov, resid, *rest = (np.asarray(a) for a in batched_solver(unit_basis(basis), solver)(
+        *(jnp.asarray(a) for a in (zf, yf, w, centre, scale, n_valid))))
+    return (coef, cov, np.sum(np.where(empty, 0.0, resid) ** 2, axis=1), *rest)
+
+
+def bias(coef, Z, centre, scale, basis: PolyBasis, lo=None, hi=None) -> np.ndarray:
+    """``kernels.evaluate``'s result from the XLA program (Z (S, c, n); optional clamp)."""
+    if lo is not None:
+        Z = np.clip(Z, lo[:, :, None], hi[:, :, None])
+    return np.asarray(batched_bias(unit_basis(basis))(
+        jnp.asarray(coef), jnp.asarray(Z.transpose(0, 2, 1)), jnp.asarray(centre),
+        jnp.asarray(scale)))
