@@ -24,9 +24,9 @@ _RANK_WARNING = ("the design is rank deficient: some covariate does not vary eno
 def cyclic_gc_paused():
     """Pause Python's cyclic garbage collector (reference counting still frees everything).
 
-    Building a fleet's documents allocates ~10^5 small containers; each 700 allocations
-    trigger a collection and the older generations' scans grow with the heap: ~0.1 s per
-    1 000 sensors (measured) for structures that hold no reference cycles.
+    A fleet fit allocates ~10^5 small containers (segments, layouts, documents); each 700
+    allocations trigger a collection and the older generations' scans grow with the heap:
+    ~0.1 s per 1 000 sensors (measured) for structures that hold no reference cycles.
     """
     was = gc.isenabled()
     gc.disable()

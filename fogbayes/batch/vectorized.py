@@ -192,6 +192,11 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     the error is raised. ``seed`` is accepted for ``fit_recording``'s signature (nothing
     here is random).
     """
+    with cyclic_gc_paused():  # ~10^5 small acyclic objects (segments, layouts, documents)
+        return _fit_documents(recs, model, orders, bayes, solver, on_error, options)
+
+
+def _fit_documents(recs, model, orders, bayes, solver, on_error, options) -> list[dict | None]:
     import fogbayes
 
     if not recs:
@@ -239,11 +244,10 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
                            _replace_counts(block_count, redo, new.count))
     # compensated output for the metrics, covariates clamped as compensation clamps them
     after = R - _bias(solver, fits.coef, Z, bases, lo, hi)
-    with cyclic_gc_paused():  # thousands of small acyclic dicts: no cycle hunting
-        metrics = segment_reports(R, after, [r.time for r in good],
-                                  prepare.segments(good, Z[:, 0, :], groups), windows=windows)
-        docs = fit_documents(good, model, spec, proc, bases, fits, lo, hi,
-                             (block_count > 0).sum(axis=1), count, metrics, fogbayes.__version__)
+    metrics = segment_reports(R, after, [r.time for r in good],
+                              prepare.segments(good, Z[:, 0, :], groups), windows=windows)
+    docs = fit_documents(good, model, spec, proc, bases, fits, lo, hi,
+                         (block_count > 0).sum(axis=1), count, metrics, fogbayes.__version__)
     for k, doc in zip(keep, docs):
         out[k] = doc
     return out
