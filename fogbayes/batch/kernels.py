@@ -308,39 +308,53 @@ def masked_block_means(t, y, z, use, start, stop):
     return tm, ym, zm, cnt
 
 
-@numba.njit(cache=True, parallel=True)
-def stability(x, a, b, start, stop, offsets):
-    """Bias and bias stability of every row of x (S, n) on samples [a, b) (paper 004 eqs.
-    12-13): ``B0 = mean(x[a:b])`` and, per window w, ``Bs_w = std_{n-1}`` of the means of
-    the blocks ``[a + start_j, a + stop_j)`` for j in ``offsets[w]:offsets[w + 1]``.
+@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
+def stability(before, after, a, b, start, stop, offsets):
+    """Bias and bias stability of every row of ``before`` and ``after`` (S, n) on samples
+    [a, b) (paper 004 eqs. 12-13): ``B0 = mean(x[a:b])`` and, per window w,
+    ``Bs_w = std_{n-1}`` of the means of the blocks ``[a + start_j, a + stop_j)`` for j in
+    ``offsets[w]:offsets[w + 1]``.
 
-    Returns B0 (S,) and Bs (S, W) (NaN for a window of fewer than two blocks).
+    Returns B0 (2, S) and Bs (2, S, W) (index 0: before, 1: after; NaN for a window of
+    fewer than two blocks).
     """
-    S = x.shape[0]
+    S = before.shape[0]
     W = offsets.size - 1
-    b0 = np.empty(S)
-    bs = np.full((S, W), np.nan)
+    b0 = np.empty((2, S))
+    bs = np.full((2, S, W), np.nan)
+    most = 0
+    for w in range(W):
+        most = max(most, offsets[w + 1] - offsets[w])
     for s in prange(S):
-        tot = 0.0
-        for i in range(a, b):
-            tot += x[s, i]
-        b0[s] = tot / (b - a)
-        for w in range(W):
-            j0, j1 = offsets[w], offsets[w + 1]
-            k = j1 - j0
-            if k < 2:
-                continue
-            means = np.empty(k)
-            for j in range(k):
-                acc = 0.0
-                for i in range(a + start[j0 + j], a + stop[j0 + j]):
-                    acc += x[s, i]
-                means[j] = acc / (stop[j0 + j] - start[j0 + j])
-            m = means.sum() / k
-            ss = 0.0
-            for j in range(k):
-                ss += (means[j] - m) ** 2
-            bs[s, w] = np.sqrt(ss / (k - 1))
+        means = np.empty(most)
+        for q in range(2):
+            x = before if q == 0 else after
+            tot = 0.0
+            for i in range(a, b):
+                tot += x[s, i]
+            b0[q, s] = tot / (b - a)
+            for w in range(W):
+                j0, j1 = offsets[w], offsets[w + 1]
+                k = j1 - j0
+                if k < 2:
+                    continue
+                for j in range(k):
+                    lo, hi = a + start[j0 + j], a + stop[j0 + j]
+                    if hi - lo == 1:  # a block of one sample (1 s windows at 1 Hz)
+                        means[j] = x[s, lo]
+                        continue
+                    acc = 0.0
+                    for i in range(lo, hi):
+                        acc += x[s, i]
+                    means[j] = acc / (hi - lo)
+                m = 0.0
+                for j in range(k):
+                    m += means[j]
+                m /= k
+                ss = 0.0
+                for j in range(k):
+                    ss += (means[j] - m) ** 2
+                bs[q, s, w] = np.sqrt(ss / (k - 1))
     return b0, bs
 
 

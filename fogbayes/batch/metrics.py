@@ -55,8 +55,8 @@ def _report(before: np.ndarray, after: np.ndarray, t: np.ndarray, tkey, a: int, 
     start = np.concatenate([lay[0] for _, lay in lays] or [np.zeros(0, np.int64)])
     stop = np.concatenate([lay[1] for _, lay in lays] or [np.zeros(0, np.int64)])
     offsets = np.cumsum([0] + [lay[0].size for _, lay in lays])
-    b0_b, bs_b = (v.tolist() for v in kernels.stability(before, a, b, start, stop, offsets))
-    b0_a, bs_a = (v.tolist() for v in kernels.stability(after, a, b, start, stop, offsets))
+    (b0_b, b0_a), (bs_b, bs_a) = (v.tolist() for v in kernels.stability(before, after, a, b,
+                                                                        start, stop, offsets))
     duration = float(t[b - 1] - t[a])
     return [{"bias_before": b0_b[s], "bias_after": b0_a[s], "duration_s": duration,
              "stability": [{"window_s": w, "before": bs_b[s][j], "after": bs_a[s][j],

@@ -232,16 +232,17 @@ def _fit_documents(recs, model, orders, bayes, solver, on_error, options) -> lis
         mask, count = _flags(solver, R, fits.coef, Z, bases, proc.n_sigma)
         redo = np.flatnonzero(count)
         if redo.size:  # refit the flagged sensors on block means without their flagged samples
-            new = prepare.block_arrays([good[s] for s in redo], R[redo], Z[redo], spec, proc,
-                                       ~mask[redo])
+            every = redo.size == len(good)  # (as in a chamber test: every sensor has a few)
+            new = prepare.block_arrays(good, R, Z, spec, proc, ~mask, groups=groups) if every \
+                else prepare.block_arrays([good[s] for s in redo], R[redo], Z[redo], spec, proc,
+                                          ~mask[redo])
             for s, k in zip(redo, (new.count > 0).sum(axis=1).tolist()):
                 _check_blocks(good[s], k, spec)  # too few blocks left raises, as the workflow's
             new_bases, lo[redo], hi[redo], new_fits = _fit(new, spec, solver)
             for s, bs in zip(redo, new_bases):
                 bases[s] = bs
-            fits = new_fits if redo.size == len(good) else _replace(fits, redo, new_fits)
-            block_count = (new.count if redo.size == len(good) else
-                           _replace_counts(block_count, redo, new.count))
+            fits = new_fits if every else _replace(fits, redo, new_fits)
+            block_count = new.count if every else _replace_counts(block_count, redo, new.count)
     # compensated output for the metrics, covariates clamped as compensation clamps them
     after = R - _bias(solver, fits.coef, Z, bases, lo, hi)
     metrics = segment_reports(R, after, [r.time for r in good],

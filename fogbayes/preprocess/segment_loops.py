@@ -70,12 +70,20 @@ def _merge_row(rates, threshold, t, end, min_duration, lab, start, stop):
 
 
 def _merge_runs(rates, threshold, t, end, min_duration):
-    """Merged runs of the labels of every row of rates (S, n): lab, start, stop (S, n) and
-    count (S,)."""
+    """Merged runs of the labels of every row of rates (S, n): lab, start, stop (S, R) and
+    count (S,) (R: the most runs of any row before merging)."""
     S, n = rates.shape
-    lab = np.zeros((S, n), np.int64)
-    start = np.zeros((S, n), np.int64)
-    stop = np.zeros((S, n), np.int64)
+    first = np.ones(S, np.int64)  # runs before merging: the arrays' width
+    for s in prange(S):
+        prev = _label(rates[s, 0], threshold)
+        for i in range(1, n):
+            cur = _label(rates[s, i], threshold)
+            first[s] += cur != prev
+            prev = cur
+    R = first.max()
+    lab = np.zeros((S, R), np.int64)
+    start = np.zeros((S, R), np.int64)
+    stop = np.zeros((S, R), np.int64)
     count = np.zeros(S, np.int64)
     for s in prange(S):
         count[s] = _merge_row(rates[s], threshold, t, end, min_duration, lab[s], start[s],
