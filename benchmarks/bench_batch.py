@@ -80,6 +80,14 @@ def vector(args) -> dict:
     t = time.perf_counter()
     recs = sensors(args.sensors, args.hours)
     t_sim = time.perf_counter() - t
+    # the whole pipeline first, in a process that holds only the recordings (the stage
+    # comparisons below keep thousands of device arrays alive)
+    out = {"sensors": args.sensors, "simulate_s": t_sim, "pipeline": pipeline(recs, args)}
+    out.update(stages(recs, args))
+    return out
+
+
+def stages(recs, args) -> dict:
     spec, proc = ThermalSpec(2, 2), make_processing("default")
     t = time.perf_counter()
     blocks = []
@@ -95,8 +103,8 @@ def vector(args) -> dict:
              np.full(len(blocks), float(blocks[0].y.size))]
     dev = [jnp.asarray(a) for a in stack]
     unit = unit_basis(bases[0])
-    out = {"sensors": args.sensors, "blocks_per_sensor": int(blocks[0].y.size),
-           "n_params": unit.n_terms, "simulate_s": t_sim, "prepare_blocks_s": t_prep}
+    out = {"blocks_per_sensor": int(blocks[0].y.size), "n_params": unit.n_terms,
+           "prepare_blocks_s": t_prep}
     for solver in ("gram", "qr"):
         vm = batched_solver(unit, solver)
         t = time.perf_counter()
@@ -126,6 +134,10 @@ def vector(args) -> dict:
     print(f"[numba] one call over all sensors {t_all * 1e3:.1f} ms, loop of one-sensor calls "
           f"{t_one * 1e3:.1f} ms -> {t_one / t_all:.2f}x; max |diff| {diff:.2e} (vs XLA "
           f"{diff_xla:.2e})", flush=True)
+    return out
+
+
+def pipeline(recs, args) -> dict:
     sub = recs[:args.workflow]
     fit_recording(sub[0], model="thermal")  # warm-up: compilations of the per-sensor path
     t = time.perf_counter()
@@ -145,8 +157,7 @@ def vector(args) -> dict:
         print(f"[pipeline/{solver}] workflow loop {t_wf:.2f} s (from {len(sub)} sensors), "
               f"fit_vectorized {t_vec:.3f} s (first call {t_first:.2f} s) -> "
               f"{t_wf / t_vec:.1f}x; max |diff| {diff:.2e}", flush=True)
-    out["pipeline"] = pipe
-    return out
+    return pipe
 
 
 def fleet(args) -> dict:

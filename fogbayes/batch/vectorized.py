@@ -55,7 +55,7 @@ from ..workflow.thermal import (
     parse_orders,
 )
 from . import kernels, prepare, xla
-from .documents import cyclic_gc_paused, fit_documents
+from .documents import cyclic_gc_paused, fit_documents, one_blas_thread
 from .files import FleetError
 from .metrics import segment_reports
 
@@ -192,7 +192,9 @@ def fit_vectorized(recs: list, *, model: str, orders: str | None = None, bayes: 
     the error is raised. ``seed`` is accepted for ``fit_recording``'s signature (nothing
     here is random).
     """
-    with cyclic_gc_paused():  # ~10^5 small acyclic objects (segments, layouts, documents)
+    # ~10^5 small acyclic objects (segments, layouts, documents); spinning BLAS threads
+    # would take the cores from the compiled loops
+    with cyclic_gc_paused(), one_blas_thread():
         return _fit_documents(recs, model, orders, bayes, solver, on_error, options)
 
 
