@@ -1,0 +1,56 @@
+"""Compiled compensation loops for polynomial bias models (Numba, CPU), one per term set.
+
+For a basis with terms ``e_k`` the loop computes, per sample, what
+:func:`fogbayes.compensate.bias_compensator`'s XLA program computes, in the same order::
+
+    u_c = (z_c - centre_c) * (1 / scale_c)
+    out = y - sum_k (coef_k * u_1 * ... * u_1 * u_2 * ...)      (e_kc factors u_c, in order)
+
+The term set is static, so its source is generated once (straight-line products, no loops
+over terms or exponents) and compiled once per term set and dtype; centre, scale and the
+coefficients are arguments, so every sensor of a fleet and every chunk of a stream share the
+compiled code. Written this way the loop runs at memory speed: it reads ``y`` and ``z`` once
+and writes ``out`` once, in place when ``out`` is given (benchmarks/RESULTS_stream.md, §3),
+where the XLA program returns a new array that the caller then copies.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import lru_cache
+
+import numba
+import numpy as np
+
+
+def _source(terms: tuple[tuple[int, ...], ...]) -> str:
+    c = len(terms[0])
+    lines = ["def loop(out, y, z, coef, centre, scale):"]
+    lines += [f"    r{j} = 1.0 / scale[{j}]" for j in range(c)]
+    lines.append("    for i in range(y.shape[0]):")
+    lines += [f"        u{j} = (z[i, {j}] - centre[{j}]) * r{j}" for j in range(c)]
+    parts = []
+    for k, e in enumerate(terms):
+        factors = [f"u{j}" for j, ej in enumerate(e) for _ in range(ej)]
+        parts.append(" * ".join([f"coef[{k}]", *factors]))
+    lines.append(f"        out[i] = y[i] - ({' + '.join(parts)})")
+    return "\n".join(lines) + "\n"
+
+
+@lru_cache(maxsize=64)
+def _compiled(terms: tuple[tuple[int, ...], ...]) -> Callable:
+    space: dict = {}
+    exec(_source(terms), space)  # noqa: S102 -- our own generated arithmetic, no input text
+    return numba.njit(nogil=True)(space["loop"])
+
+
+def compensate_into(basis, coef, z, y, out=None) -> np.ndarray:
+    """``y - X(z) @ coef`` of one sensor (``z`` (n, c), ``y`` (n,)) written into ``out``
+    (a new array of ``y``'s dtype when None); returns ``out``."""
+    y = np.asarray(y)
+    z = np.asarray(z, dtype=y.dtype).reshape(y.shape[0], -1)
+    out = np.empty_like(y) if out is None else out
+    _compiled(basis.terms)(out, y, z, np.asarray(coef, dtype=y.dtype),
+                           np.asarray(basis.centre, dtype=y.dtype),
+                           np.asarray(basis.scale, dtype=y.dtype))
+    return out
