@@ -60,16 +60,25 @@ class Compensator(NamedTuple):
     box: tuple[float, float]
     iterations: int
     method: str
-    fn: object  # jitted (U, T, t) -> CompensationResult, coefficients baked in
-    stream_fn: object  # the same rate, U's buffer donated to the output
+    fn: object  # jitted XLA (U, T, t) -> CompensationResult, coefficients baked in
+    stream_fn: object  # the XLA rate, U's buffer donated to the output
+    loop: object = None  # on a CPU: the compiled loop(out, U, T, t) (compensate_composite_loop)
 
     def __call__(self, U, T, t) -> CompensationResult:
+        if self.loop is not None:
+            return _loop_result(self.loop, U, T, t)
         return self.fn(U, T, t)
 
-    def stream(self, U, T, t):
-        """Rate only (NaN where not invertible), written into U's buffer: for chunked
-        streaming of long records. ``U`` must be a JAX array you no longer need (it is
-        donated); no output is allocated, so no fresh pages are faulted in."""
+    def stream(self, U, T, t, out=None):
+        """Rate only (NaN where not invertible): for chunked streaming of long records.
+
+        On a CPU the compiled loop writes into ``out`` (a new array when None). Elsewhere
+        the XLA program writes into U's buffer: ``U`` must be a JAX array you no longer
+        need (it is donated), and ``out`` is not used."""
+        if self.loop is not None:
+            U = np.asarray(U)
+            return self.loop(np.empty(U.shape, U.dtype) if out is None else out, U,
+                             np.asarray(T, U.dtype), np.asarray(t, U.dtype))
         return self.stream_fn(U, T, t)
 
 
@@ -311,7 +320,21 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
     fn = jax.jit(lambda U, T, t: _result(consts, sc_f, box, U, T, t, **kw))
     stream_fn = jax.jit(lambda U, T, t: _rate(consts, sc_f, box, U, T, t, **kw),
                         donate_argnums=0)
-    return Compensator(p, sc, box, k, method, fn, stream_fn)
+    loop = None
+    if jax.default_backend() == "cpu":  # one compiled pass per sample, at memory speed
+        from .compensate_composite_loop import compile_loop
+
+        loop = compile_loop(consts, sc_f, box, **kw)
+    return Compensator(p, sc, box, k, method, fn, stream_fn, loop)
+
+
+def _loop_result(loop, U, T, t) -> CompensationResult:
+    """:class:`CompensationResult` of the compiled loop (arrays of one shape, any dtype)."""
+    U, T, t = np.broadcast_arrays(*(np.asarray(a) for a in (U, T, t)))
+    dt = np.result_type(U.dtype, np.float32)  # integer counts compute in float
+    flat = [np.ascontiguousarray(a, dtype=dt).ravel() for a in (U, T, t)]
+    rate = loop(np.empty(flat[0].size, dt), *flat).reshape(U.shape)
+    return CompensationResult(rate, np.isfinite(rate))
 
 
 def reciprocal_poly(p: FullParams, T_range, sc: Scaling, *, order: int = 6) -> np.ndarray:

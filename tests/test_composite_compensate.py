@@ -89,12 +89,25 @@ def test_float32_inputs_stay_float32_and_accurate():
 def test_jax_matches_plain_numpy_and_compiles_once():
     comp = _comp("halley")
     ref, ok = compensate_numpy(P, SC, comp.box, U, TG, TT, method="halley", iterations=2)
-    res = comp(U, TG, TT)
+    res = comp.fn(U, TG, TT)  # the XLA program (what a GPU runs)
     np.testing.assert_allclose(res.rate, ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(res.in_range, ok)
     before = comp.fn._cache_size()
-    comp(U * 1.0001, TG, TT)  # new values, same shapes: the baked-in compensator is reused
+    comp.fn(U * 1.0001, TG, TT)  # new values, same shapes: the baked-in compensator is reused
     assert comp.fn._cache_size() == before == 1
+    # on a CPU, calling the compensator runs its compiled loop: same numbers, and it
+    # compiles once (per dtype) as well
+    assert (comp.loop is not None) == (jax.default_backend() == "cpu")
+    loop = comp(U, TG, TT)
+    np.testing.assert_allclose(loop.rate, ref, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(loop.in_range, ok)
+    if comp.loop is not None:
+        comp(U * 1.0001, TG, TT)
+        assert len(comp.loop.signatures) == 1
+        into = np.full(U.size + 2, -1.0)
+        back = comp.stream(np.ravel(U), np.ravel(TG), np.ravel(TT), out=into[1:-1])
+        assert back.base is into and into[0] == into[-1] == -1.0
+        np.testing.assert_array_equal(into[1:-1], np.ravel(loop.rate))
     # the argument form compiles once for any coefficients of the same orders
     box = jnp.asarray(comp.box)
     compensate(P, SC, box, U, TG, TT, method="halley", iterations=2)
