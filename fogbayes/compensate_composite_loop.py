@@ -11,7 +11,7 @@ Per sample, the same algorithm as the XLA program ``_rate`` (scaled units)::
 
 The coefficients are written into the generated source as constants (as the XLA program
 bakes them in), so the per-sample code is straight-line and the compiler vectorises the
-loop over samples; it reads U, T, t once and writes the rate once, into ``out`` when given.
+loop over samples (split over the cores); it reads U, T, t once and writes the rate once, into ``out`` when given.
 Compiled once per compensator (a fit), ~0.3 s.
 """
 
@@ -44,7 +44,7 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> str:
     k = M.shape[1]
     lo, hi = (repr(float(v)) for v in box)
     S = [f"S{j}" for j in range(k)]
-    L = ["def loop(out, U, T, t):", "    for i in range(U.shape[0]):",
+    L = ["def loop(out, U, T, t):", "    for i in prange(U.shape[0]):",
          f"        Tp = (T[i] - {float(sc.T_ref)!r}) * {1.0 / sc.T_scale!r}",
          f"        tp = t[i] * {1.0 / sc.t_scale!r}",
          (f"        y = (U[i] - {float(sc.U_ref)!r}) * {1.0 / sc.U_scale!r} - "
@@ -85,6 +85,6 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> str:
 
 def compile_loop(p, sc, box, *, method: str, iterations: int, recip):
     """``loop(out, U, T, t)`` for these coefficients (see the module doc)."""
-    space = {"np": np}
+    space = {"np": np, "prange": numba.prange}
     exec(source(p, sc, box, method=method, iterations=iterations, recip=recip), space)  # noqa: S102
-    return numba.njit(nogil=True, error_model="numpy")(space["loop"])
+    return numba.njit(nogil=True, parallel=True, error_model="numpy")(space["loop"])

@@ -7,7 +7,7 @@ For a basis with terms ``e_k`` the loop computes, per sample, what
     out = y - sum_k (coef_k * u_1 * ... * u_1 * u_2 * ...)      (e_kc factors u_c, in order)
 
 The term set is static, so its source is generated once (straight-line products, no loops
-over terms or exponents) and compiled once per term set and dtype; centre, scale and the
+over terms or exponents) and compiled once per term set and dtype, samples split over the cores; centre, scale and the
 coefficients are arguments, so every sensor of a fleet and every chunk of a stream share the
 compiled code. Written this way the loop runs at memory speed: it reads ``y`` and ``z`` once
 and writes ``out`` once, in place when ``out`` is given (benchmarks/RESULTS_stream.md, §3),
@@ -27,7 +27,7 @@ def _source(terms: tuple[tuple[int, ...], ...]) -> str:
     c = len(terms[0])
     lines = ["def loop(out, y, z, coef, centre, scale):"]
     lines += [f"    r{j} = 1.0 / scale[{j}]" for j in range(c)]
-    lines.append("    for i in range(y.shape[0]):")
+    lines.append("    for i in prange(y.shape[0]):")
     lines += [f"        u{j} = (z[i, {j}] - centre[{j}]) * r{j}" for j in range(c)]
     parts = []
     for k, e in enumerate(terms):
@@ -39,9 +39,9 @@ def _source(terms: tuple[tuple[int, ...], ...]) -> str:
 
 @lru_cache(maxsize=64)
 def _compiled(terms: tuple[tuple[int, ...], ...]) -> Callable:
-    space: dict = {}
+    space: dict = {"prange": numba.prange}
     exec(_source(terms), space)  # noqa: S102 -- our own generated arithmetic, no input text
-    return numba.njit(nogil=True)(space["loop"])
+    return numba.njit(nogil=True, parallel=True)(space["loop"])
 
 
 def compensate_into(basis, coef, z, y, out=None) -> np.ndarray:
