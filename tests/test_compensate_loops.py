@@ -44,3 +44,40 @@ def test_loop_equals_the_design_matrix_form(case):
                           y.astype(np.float32))
     assert y32.dtype == np.float32
     np.testing.assert_allclose(y32, want, rtol=0, atol=2e-4 * np.abs(want).max())
+
+
+def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
+    import jax
+
+    from fogbayes.batch.vectorized import default_solver
+    from fogbayes.compensate_composite import build_compensator
+    from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
+
+    names, terms = CASES["bias-t cubic"]
+    rng = np.random.default_rng(9)
+    z = rng.uniform(-40, 60, (2000, 1))
+    y = rng.normal(0, 10, 2000)
+    basis = make_basis(names, terms, z)
+    coef = rng.normal(0, 5, len(terms))
+    cpu = bias_compensator(basis).single
+    T, W, t = rng.uniform(-30, 60, 500), rng.uniform(-80, 80, 500), rng.uniform(0, 60, 500)
+    U = raw_predict(PAPER_000, T, W, t)
+    sc = Scaling(15.0, 45.0, 80.0, 60.0, float(U.mean()), float(np.abs(U - U.mean()).max()))
+    p = from_raw(PAPER_000, sc)
+    comp_cpu = build_compensator(p, sc, T_range=(-30, 60), W_range=(-80, 80))
+    assert default_solver() == "numba" and comp_cpu.loop is not None
+    # what a machine with a GPU selects (the programs themselves run here, on the CPU)
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    bias_compensator.cache_clear()
+    try:
+        xla = bias_compensator(basis).single
+        assert xla is not cpu and hasattr(xla, "lower")  # a jitted XLA function
+        np.testing.assert_allclose(np.asarray(xla(coef, z, y)), cpu(coef, z, y), rtol=0,
+                                   atol=1e-13)
+        assert default_solver() == "gram"
+        comp = build_compensator(p, sc, T_range=(-30, 60), W_range=(-80, 80))
+        assert comp.loop is None
+        np.testing.assert_allclose(np.asarray(comp(U, T, t).rate), comp_cpu(U, T, t).rate,
+                                   rtol=1e-12)
+    finally:
+        bias_compensator.cache_clear()  # later tests build the CPU compensators again
