@@ -196,3 +196,21 @@ def test_loop_task_writes_what_run_loop_returns(tmp_path):
     assert row["rms_before"] == ref.initial.rms and row["rms_after"] == ref.final.rms
     comp = pd.read_csv(tmp_path / "out" / row["outputs"]["compensated"])
     np.testing.assert_array_equal(comp["output"], ref.compensated["output"])  # %.17g: exact
+
+
+def test_vectorized_two_clocks_and_emptied_blocks_equal_the_workflow():
+    from fogbayes.batch import fit_vectorized
+
+    # 1 Hz with 1 s blocks: every Pauta-flagged sample empties its block (weight 0 in the
+    # stacked fit, dropped by the workflow); two clock groups of 3 and 2 recordings
+    recs = [simulate("thermal", seed=s, duration=1200.0, fs=1.0, sensor_id=f"s{s}").recording
+            for s in range(5)]
+    recs[3:] = [r.replace(time=r.time + 0.5) for r in recs[3:]]
+    docs = fit_vectorized(recs, model="thermal")
+    assert sum(d["outliers"]["count"] for d in docs) > 0
+    assert len({d["fit"]["n_blocks"] for d in docs}) > 1  # emptied blocks differ by sensor
+    for rec, doc in zip(recs, docs):
+        ref = to_jsonable(workflow_for("thermal").fit_recording(rec, model="thermal"))
+        doc = to_jsonable(doc)
+        assert doc.pop("vectorized") is True
+        _close(ref, doc, rtol=1e-9, atol=1e-12)  # tolerance: see the CLI test above
