@@ -168,26 +168,32 @@ def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
     return coef, cov, rss, s2, dof, ok
 
 
-@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _bias_row(coef, z, s, centre, scale, lo, hi, exps, out):
+    """x(clip(z_si, lo_s, hi_s)) . b_s for every sample i of sensor s, into out (n,)."""
+    n, p = z.shape[2], exps.shape[0]
+    X = np.empty((p, CHUNK))
+    u = np.empty(CHUNK)
+    for i0 in range(0, n, CHUNK):
+        k = min(CHUNK, n - i0)
+        _monomials(z, s, i0, k, centre, scale, lo, hi, exps, X, u)
+        for r in range(k):
+            u[r] = 0.0
+        for a in range(p):
+            for r in range(k):
+                u[r] += X[a, r] * coef[s, a]
+        for r in range(k):
+            out[i0 + r] = u[r]
+
+
+@numba.njit(cache=True, parallel=True)
 def evaluate(coef, z, centre, scale, exps, lo, hi):
     """x(clip(z_si, lo_s, hi_s)) . b_s for every sensor s and sample i: coef (S, p),
     z (S, c, n), lo/hi (S, c) (pass -inf/inf not to clamp) -> (S, n)."""
     S, n = z.shape[0], z.shape[2]
-    p = exps.shape[0]
     out = np.empty((S, n))
     for s in prange(S):
-        X = np.empty((p, CHUNK))
-        u = np.empty(CHUNK)
-        for i0 in range(0, n, CHUNK):
-            k = min(CHUNK, n - i0)
-            _monomials(z, s, i0, k, centre, scale, lo, hi, exps, X, u)
-            for r in range(k):
-                u[r] = 0.0
-            for a in range(p):
-                for r in range(k):
-                    u[r] += X[a, r] * coef[s, a]
-            for r in range(k):
-                out[s, i0 + r] = u[r]
+        _bias_row(coef, z, s, centre, scale, lo, hi, exps, out[s])
     return out
 
 
@@ -239,30 +245,20 @@ def pauta(r, n_sigma, max_iter):
     return mask, count, threshold, passes
 
 
-@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, parallel=True)
 def residual_pauta(y, coef, z, centre, scale, exps, n_sigma, max_iter):
     """:func:`pauta` of the residuals ``y - x(z) . b`` of every sensor (y (S, n)), each
     formed in a per-thread buffer: mask (S, n) and count (S,)."""
     S, n = y.shape
-    p = exps.shape[0]
     lo = np.full(centre.shape, -np.inf)
     hi = np.full(centre.shape, np.inf)
     mask = np.zeros((S, n), np.bool_)
     count = np.zeros(S, np.int64)
     for s in prange(S):
         r = np.empty(n)
-        X = np.empty((p, CHUNK))
-        u = np.empty(CHUNK)
-        for i0 in range(0, n, CHUNK):
-            k = min(CHUNK, n - i0)
-            _monomials(z, s, i0, k, centre, scale, lo, hi, exps, X, u)
-            for q in range(k):
-                u[q] = y[s, i0 + q]
-            for a in range(p):
-                for q in range(k):
-                    u[q] -= X[a, q] * coef[s, a]
-            for q in range(k):
-                r[i0 + q] = u[q]
+        _bias_row(coef, z, s, centre, scale, lo, hi, exps, r)
+        for i in range(n):
+            r[i] = y[s, i] - r[i]
         count[s] = _pauta_row(r, mask[s], n_sigma, max_iter)[0]
     return mask, count
 
