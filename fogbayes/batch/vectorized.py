@@ -25,9 +25,9 @@ residual variance uses each sensor's own ``m_s - p`` degrees of freedom, as the 
 does. Order choice is not vectorised: ``orders`` must name one order. The documents equal
 the per-recording workflow's to ~1e-9 relative (tests/test_batch.py; measured 1e-14).
 
-Speed (benchmarks/RESULTS_batch.md, 1 000 sensors x 3 600 samples, 2-core CPU, idle): about
-20x a loop of the per-recording workflow with the compiled loops (12x with the XLA
-program), same coefficients to 1e-14.
+Speed (benchmarks/RESULTS_batch.md, 1 000 sensors x 3 600 samples, 2-core CPU, idle):
+25.1-25.6x a loop of the per-recording workflow with the compiled loops (12.7-14.1x with the
+XLA program), same coefficients to 8e-15.
 """
 
 from __future__ import annotations
