@@ -1,5 +1,4 @@
-"""The fit documents of a vectorised fleet fit, as ``fit_recording`` writes them, and the
-run-time settings of a fleet fit (cyclic GC paused, BLAS on one thread).
+"""The fit documents of a vectorised fleet fit, as ``fit_recording`` writes them.
 
 Same keys in the same order as :func:`fogbayes.workflow.thermal.fit_recording`'s document;
 the raw coefficients (powers of the covariates, the papers' form) of all sensors come from
@@ -9,10 +8,6 @@ one batched change of basis (:func:`fogbayes.models.polynomial.rebase_matrices`)
 
 from __future__ import annotations
 
-import gc
-from contextlib import contextmanager
-from functools import lru_cache
-
 import numpy as np
 
 from ..export import coefficient_document
@@ -20,41 +15,6 @@ from ..models.polynomial import rebase_matrices
 
 _RANK_WARNING = ("the design is rank deficient: some covariate does not vary enough (e.g. "
                  "dT/dt in a record without ramps); coefficients are not identified")
-
-
-@contextmanager
-def one_blas_thread():
-    """NumPy/SciPy's BLAS on one thread (its matrices here are tiny).
-
-    OpenBLAS threads busy-wait for a while after every call; on a 2-core machine they took
-    the cores from the compiled loops that followed (a 16 ms normal-equation pass measured
-    27-66 ms after a BLAS call, 16 ms with one BLAS thread)."""
-    with _controller().limit(limits=1, user_api="blas"):
-        yield
-
-
-@lru_cache(maxsize=1)
-def _controller():
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
-
-
-@contextmanager
-def cyclic_gc_paused():
-    """Pause Python's cyclic garbage collector (reference counting still frees everything).
-
-    A fleet fit allocates ~10^5 small containers (segments, layouts, documents); each 700
-    allocations trigger a collection and the older generations' scans grow with the heap:
-    ~0.1 s per 1 000 sensors (measured) for structures that hold no reference cycles.
-    """
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was:
-            gc.enable()
 
 
 def fit_documents(recs, model: str, spec, proc, bases, fits, lo, hi, n_blocks, n_flagged,

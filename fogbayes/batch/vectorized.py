@@ -55,9 +55,10 @@ from ..workflow.thermal import (
     parse_orders,
 )
 from . import kernels, prepare, xla
-from .documents import cyclic_gc_paused, fit_documents, one_blas_thread
+from .documents import fit_documents
 from .files import FleetError
 from .metrics import segment_reports
+from .runtime import cyclic_gc_paused, one_blas_thread
 
 RCOND = 1e-10  # rank test of the solvers (inference.lsq's default)
 _UNSUPPORTED = ("order_criterion", "noise", "ar_order", "ma_order", "num_warmup",
