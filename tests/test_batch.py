@@ -214,3 +214,27 @@ def test_vectorized_two_clocks_and_emptied_blocks_equal_the_workflow():
         doc = to_jsonable(doc)
         assert doc.pop("vectorized") is True
         _close(ref, doc, rtol=1e-9, atol=1e-12)  # tolerance: see the CLI test above
+
+
+def test_vectorized_reports_an_unfittable_recording_and_fits_the_others():
+    from fogbayes.batch import fit_vectorized
+
+    # one recording without a temperature channel: the batched preparation fails, the
+    # recordings are prepared one by one, the bad one is reported, the others still equal
+    # the workflow's documents (recordings stacked from per-recording blocks)
+    recs = [simulate("thermal", seed=s, duration=1200.0, fs=1.0, sensor_id=f"s{s}").recording
+            for s in range(4)]
+    recs[2] = recs[2].replace(temperatures=np.zeros((recs[2].n, 0)), temperature_names=())
+    errors = []
+    docs = fit_vectorized(recs, model="thermal", on_error=lambda i, e: errors.append((i, e)))
+    assert [i for i, _ in errors] == [2] and "temperature" in str(errors[0][1])
+    assert docs[2] is None
+    for rec, doc in zip(recs, docs):
+        if doc is None:
+            continue
+        ref = to_jsonable(workflow_for("thermal").fit_recording(rec, model="thermal"))
+        doc = to_jsonable(doc)
+        assert doc.pop("vectorized") is True
+        _close(ref, doc, rtol=1e-9, atol=1e-12)
+    with pytest.raises(Exception, match="temperature"):  # without on_error: raised
+        fit_vectorized(recs, model="thermal")
