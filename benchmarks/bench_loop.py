@@ -5,6 +5,8 @@ Usage::
     python benchmarks/bench_loop.py study [--quick] [--workers 2] [--out benchmarks/loop_study.json]
     python benchmarks/bench_loop.py timing           # 6 h, 10 Hz record through `fogbayes loop`
     python benchmarks/bench_loop.py measured         # ADIS16405 (allan) and PAN TVAC (bias-t)
+    python benchmarks/bench_loop.py detectability    # right first among what the oracle detects
+    python benchmarks/bench_loop.py sweep            # 0.5x-16x sizes, 50 Hz 1 h and 1 Hz 12 h
 
 Study design (every case a fresh simulated recording, fixed seeds):
   * every effect name, present but undeclared, on its base model (thermal effects on
@@ -43,6 +45,7 @@ CONFIGS = [(1.0, "default", 10.0, 3 * 3600, "thermal"),
            (2.0, "flicker", 1.0, 6 * 3600, "thermal"),
            (1.0, "walk", 10.0, 6 * 3600, "paper004"),
            (2.0, "white", 2.0, 3 * 3600, "thermal")]
+DEFAULT_OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "loop_study.json")
 RATE_TABLE = ("scale_factor_nonlinearity", "scale_factor_asymmetry", "scale_factor_temperature")
 
 
@@ -173,6 +176,134 @@ def study(args) -> None:
             print(r["effect"], r["model"], r["noise"], r["fs"], r["seed"], "->", r["added"],
                   f"{r['wall_s']:.1f}s", flush=True)
     print(summarise(done))
+
+
+#: The magnitude sweep: every effect at sizes outside the study's 1x/2x (config A, the rate
+#: table's default), and two sampling set-ups the study does not have (1 h at 50 Hz, 12 h at
+#: 1 Hz, both with the "fog" noise mix), on fresh seeds from 200.
+SWEEP_MAGNITUDES = (0.5, 4.0, 16.0)
+SWEEP_SETUPS = [(2.0, "fog", 50.0, 3600.0, "thermal"), (2.0, "fog", 1.0, 12 * 3600.0, "thermal")]
+
+
+def sweep_cases(first_seed: int = 200, n_seeds: int = 3) -> list[dict]:
+    seeds = range(first_seed, first_seed + n_seeds)
+    grid = []
+    for eff in THERMAL:
+        for mag in SWEEP_MAGNITUDES:
+            grid += [dict(effect=eff, model="bias-t", profile="thermal", magnitude=mag,
+                          noise="default", fs=10.0, duration=3 * 3600.0, seed=sd) for sd in seeds]
+        for mag, noise, fs, dur, prof in SWEEP_SETUPS:
+            grid += [dict(effect=eff, model="bias-t", profile=prof, magnitude=mag, noise=noise,
+                          fs=fs, duration=float(dur), seed=sd) for sd in seeds[:2]]
+    for eff in RATE_TABLE:
+        for mag in SWEEP_MAGNITUDES:
+            grid += [dict(effect=eff, model="composite", profile="ratetable", magnitude=mag,
+                          noise="default", fs=10.0, duration=2 * 3600.0, seed=sd) for sd in seeds]
+    for mag, noise, fs, dur, prof in SWEEP_SETUPS:  # clean records of the two new set-ups
+        grid += [dict(effect=None, model="bias-t", profile=prof, magnitude=mag, noise=noise,
+                      fs=fs, duration=float(dur), seed=sd) for sd in range(first_seed, first_seed + 6)]
+    return grid
+
+
+def sweep(args) -> None:
+    """Right effect first by size and sampling set-up (see :data:`SWEEP_MAGNITUDES`)."""
+    out = args.out if args.out != DEFAULT_OUT else os.path.join(os.path.dirname(__file__),
+                                                                 "loop_sweep.json")
+    todo = sweep_cases(args.first_seed if args.first_seed else 200)
+    done = json.load(open(out)) if os.path.exists(out) else []
+    seen = {json.dumps({k: r[k] for k in todo[0]}, sort_keys=True) for r in done}
+    todo = [c for c in todo if json.dumps(c, sort_keys=True) not in seen]
+    print(f"{len(todo)} cases to run ({len(done)} already done)", flush=True)
+    with ProcessPoolExecutor(args.workers) as pool:
+        for r in pool.map(run_case, todo):
+            done.append(r)
+            json.dump(done, open(out, "w"), indent=1, default=float)
+            print(r["effect"], r["magnitude"], r["noise"], r["fs"], r["seed"], "->", r["added"],
+                  f"{r['wall_s']:.1f}s", flush=True)
+    key = lambda r: (r["noise"], r["fs"], r["duration"], r["magnitude"])
+    for k, grp in itertools.groupby(sorted(done, key=key), key=key):
+        print(f"\n## noise {k[0]}, {k[1]:g} Hz, {k[2] / 3600:g} h, magnitude x{k[3]:g}")
+        print(summarise(list(grp)))
+
+
+def oracle_case(case: dict) -> dict:
+    """The oracle's own evidence on one study record: 2 (logL(true model) - logL(base)).
+
+    The true model at its true parameters (nothing searched; for ``markov_noise`` the
+    Gauss-Markov time constant known, its variance and the other noise hyperparameters by
+    ML), both fitted as the loop fits its models.
+    """
+    import fogbayes  # noqa: F401
+    from fogbayes.diagnose.context import make_context
+    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.bases import base_terms
+    from fogbayes.loop.testbed import make_record, oracle_terms
+
+    tr = make_record(case["effect"], seed=case["seed"], duration=case["duration"], fs=case["fs"],
+                     magnitude=case["magnitude"], noise=case["noise"], profile=case["profile"])
+    ctx = make_context(tr.recording)
+    base = base_terms(ctx, case["model"])
+    fit0 = fit_terms(ctx, base)
+    if case["effect"] == "markov_noise":
+        lr, dof = 2.0 * (_fixed_tau_fit(ctx, fit0, tr.effect_params.get("tau_c", 300.0))
+                         - fit0.loglik), 1
+    else:
+        terms = oracle_terms(ctx, base, case["effect"], tr.effect_params)
+        fit1 = fit_terms(ctx, terms)
+        lr, dof = 2.0 * (fit1.loglik - fit0.loglik), fit1.X.shape[1] - fit0.X.shape[1]
+    return dict(case, oracle_lr=max(lr, 0.0), oracle_dof=dof)
+
+
+#: candidates a thermal bias-t step weighs (the family of its Sidak correction)
+N_CAND = 9
+
+
+def oracle_log10_p_fw(o: dict) -> float:
+    """Family-wise p of the oracle's ratio: chi^2 with the effect's columns; for markov_noise
+    (one variance at its boundary, tau_c known) the 50:50 chi^2_0 : chi^2_1 mixture (Self &
+    Liang 1987); Sidak over :data:`N_CAND`."""
+    from fogbayes.diagnose import evidence as ev
+
+    lp = ev.log_chi2_sf(o["oracle_lr"], o["oracle_dof"])
+    if o["effect"] == "markov_noise":
+        lp += np.log(0.5) if o["oracle_lr"] > 0 else 0.0
+    return ev.fw_log_p(min(lp, 0.0), N_CAND) / np.log(10)
+
+
+def detectability(args) -> None:
+    """Right effect first among the study records whose effect the oracle itself detects.
+
+    The oracle knows the true parameters, so it pays nothing for a search: its family-wise
+    p < 0.01 bounds what the loop, at the same level, can detect. Oracle ratios are cached
+    in ``loop_oracle.json`` (delete it to recompute, ~25 min on 1 core).
+    """
+    here = os.path.dirname(__file__)
+    rows = []
+    for f in ("loop_study.json", "loop_study_fresh.json"):
+        rows += [r for r in json.load(open(os.path.join(here, f))) if r["effect"] is not None]
+    keys = ("effect", "model", "profile", "magnitude", "noise", "fs", "duration", "seed")
+    out = os.path.join(here, "loop_oracle.json")
+    orc = json.load(open(out)) if os.path.exists(out) else []
+    if [{k: o[k] for k in keys} for o in orc] != [{k: r[k] for k in keys} for r in rows]:
+        with ProcessPoolExecutor(args.workers) as pool:
+            orc = list(pool.map(oracle_case, [{k: r[k] for k in keys} for r in rows]))
+        json.dump(orc, open(out, "w"), indent=1, default=float)
+    detect = [oracle_log10_p_fw(o) < np.log10(0.01) for o in orc]
+    print(f"oracle detects {sum(detect)}/{len(rows)} planted effects at family-wise 0.01")
+    print("| effect | cases | oracle detects | right first among them | misses where the oracle "
+          "does not detect |\n|---|---|---|---|---|")
+    key = lambda x: x[0]["effect"]
+    for eff, grp in itertools.groupby(sorted(zip(rows, detect), key=key), key=key):
+        g = list(grp)
+        d = [r for r, ok in g if ok]
+        right = sum(r["added"][:1] == [eff] for r in d)
+        undet = sum(r["added"][:1] != [eff] for r, ok in g if not ok)
+        print(f"| {eff} | {len(g)} | {len(d)} | {right}/{len(d)} | {undet} |")
+    right = sum(r["added"][:1] == [r["effect"]] for r, ok in zip(rows, detect) if ok)
+    n = sum(detect)
+    lo, hi = clopper_pearson(right, n)
+    print(f"right first among detectable: {right}/{n} = {100 * right / n:.1f} % "
+          f"(95 % CI {100 * lo:.1f}-{100 * hi:.1f})")
 
 
 def timing(args) -> None:
@@ -324,17 +455,19 @@ def markov_info(args) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=("study", "timing", "measured", "markov_info"))
+    ap.add_argument("what", choices=("study", "timing", "measured", "markov_info", "sweep",
+                                        "detectability"))
     ap.add_argument("--seeds", type=int, default=6)
     ap.add_argument("--effects", default=None, help="comma-separated effect names (None = clean)")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--first-seed", type=int, default=0,
                     help="study: seeds from here (fresh seeds test the method on unseen records)")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", default=os.path.join(os.path.dirname(__file__), "loop_study.json"))
+    ap.add_argument("--out", default=DEFAULT_OUT)
     args = ap.parse_args()
     {"study": study, "timing": timing, "measured": measured,
-     "markov_info": markov_info}[args.what](args)
+     "markov_info": markov_info, "sweep": sweep,
+     "detectability": detectability}[args.what](args)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@
         suggestive (p_familywise < 0.1) and d elpd_loo > 0; stop if none is
         rank the supported ones against each other (bootstrap duels, :mod:`.ranking`)
         and add the winner, listing the indistinguishable ones as alternatives
+        (an accepted step's time is then placed inside its block, :func:`polish_step`)
     scan the final residual for structure no candidate names (``unexplained``)
 
 See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
@@ -27,7 +28,7 @@ from ..diagnose.candidates import candidates_for
 from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
 from ..diagnose.markov import markov_log_p, refit_markov, screen_markov
-from ..diagnose.refine import refine
+from ..diagnose.refine import polish_step, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from ..inference import noise_ssm as ns
@@ -64,7 +65,9 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "(level 0.05); the "
         "one not rejected wins; if neither is rejected they are indistinguishable, the one "
         "with fewer searched parameters is kept and the other listed in 'alternatives'; "
-        "if both are, the higher likelihood. alpha = 0.01 by default.")
+        "if both are, the higher likelihood. alpha = 0.01 by default. After the decision, "
+        "an accepted step's time is placed to 1/20 of a block (exact block columns, kept "
+        "if the refitted likelihood rises).")
 
 
 class Options(NamedTuple):
@@ -265,9 +268,9 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         if tr is None:
             stop = Rejected(why["reason"], why.get("best") or {})
             break
-        new = tr.fit
-        m1 = _metrics(ctx, new, seed, cache)
         s = tr.screened
+        new = polish_step(ctx, fit, tr.fit)  # a step's time within its block (no-op otherwise)
+        m1 = _metrics(ctx, new, seed, cache)
         term = new.terms[-1] if s.candidate.kind != "noise" else None
         detail = _detail(new, term, rec, s)
         steps.append(Step(s.candidate.effect, s.candidate.covariates, term, detail, evid,
