@@ -160,22 +160,25 @@ def summarise(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def study(args) -> None:
-    todo = cases(args.quick, tuple(args.effects.split(",")) if args.effects else None,
-                 args.first_seed)
-    done = []
-    if os.path.exists(args.out):
-        done = json.load(open(args.out))
+def run_cases(todo: list[dict], out: str, workers: int) -> list[dict]:
+    """Run the cases not yet in ``out`` (a JSON list of rows, rewritten after each case)."""
+    done = json.load(open(out)) if os.path.exists(out) else []
     seen = {json.dumps({k: r[k] for k in todo[0]}, sort_keys=True) for r in done}
     todo = [c for c in todo if json.dumps(c, sort_keys=True) not in seen]
     print(f"{len(todo)} cases to run ({len(done)} already done)", flush=True)
-    with ProcessPoolExecutor(args.workers) as pool:
+    with ProcessPoolExecutor(workers) as pool:
         for r in pool.map(run_case, todo):
             done.append(r)
-            json.dump(done, open(args.out, "w"), indent=1, default=float)
-            print(r["effect"], r["model"], r["noise"], r["fs"], r["seed"], "->", r["added"],
-                  f"{r['wall_s']:.1f}s", flush=True)
-    print(summarise(done))
+            json.dump(done, open(out, "w"), indent=1, default=float)
+            print(r["effect"], r["model"], r["magnitude"], r["noise"], r["fs"], r["seed"], "->",
+                  r["added"], f"{r['wall_s']:.1f}s", flush=True)
+    return done
+
+
+def study(args) -> None:
+    todo = cases(args.quick, tuple(args.effects.split(",")) if args.effects else None,
+                 args.first_seed)
+    print(summarise(run_cases(todo, args.out, args.workers)))
 
 
 #: The magnitude sweep: every effect at sizes outside the study's 1x/2x (config A, the rate
@@ -209,17 +212,7 @@ def sweep(args) -> None:
     """Right effect first by size and sampling set-up (see :data:`SWEEP_MAGNITUDES`)."""
     out = args.out if args.out != DEFAULT_OUT else os.path.join(os.path.dirname(__file__),
                                                                  "loop_sweep.json")
-    todo = sweep_cases(args.first_seed if args.first_seed else 200)
-    done = json.load(open(out)) if os.path.exists(out) else []
-    seen = {json.dumps({k: r[k] for k in todo[0]}, sort_keys=True) for r in done}
-    todo = [c for c in todo if json.dumps(c, sort_keys=True) not in seen]
-    print(f"{len(todo)} cases to run ({len(done)} already done)", flush=True)
-    with ProcessPoolExecutor(args.workers) as pool:
-        for r in pool.map(run_case, todo):
-            done.append(r)
-            json.dump(done, open(out, "w"), indent=1, default=float)
-            print(r["effect"], r["magnitude"], r["noise"], r["fs"], r["seed"], "->", r["added"],
-                  f"{r['wall_s']:.1f}s", flush=True)
+    done = run_cases(sweep_cases(args.first_seed if args.first_seed else 200), out, args.workers)
     key = lambda r: (r["noise"], r["fs"], r["duration"], r["magnitude"])
     for k, grp in itertools.groupby(sorted(done, key=key), key=key):
         print(f"\n## noise {k[0]}, {k[1]:g} Hz, {k[2] / 3600:g} h, magnitude x{k[3]:g}")
