@@ -62,9 +62,14 @@ def _local_terms(ctx: Context, s: Screened) -> list[Term]:
     return [term]
 
 
-def local_stats(ctx: Context, wm: Whitened, terms: list[Term]) -> np.ndarray:
-    """Fixed-noise 2 dlogL of each term added alone to the whitened model."""
-    Z = [columns(t, ctx.bcov) for t in terms]
+def local_stats(ctx: Context, wm: Whitened, terms: list[Term], *,
+                exact: bool = False) -> np.ndarray:
+    """Fixed-noise 2 dlogL of each term added alone to the whitened model.
+
+    exact: the block means of the per-sample columns (``Context.block_columns``) instead
+    of the columns of the block-mean covariates (what the screening uses).
+    """
+    Z = [ctx.block_columns(t) if exact else columns(t, ctx.bcov) for t in terms]
     Zw = whiten_columns(ctx, wm.spec, wm.theta, np.column_stack(Z))
     out, j = [], 0
     for z in Z:
@@ -102,13 +107,7 @@ def polish_step(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
     offsets = dt * np.linspace(-1.0, 1.0, 2 * STEP_SUBDIVISIONS + 1)
     terms = [_with(term, time=float(term.params["time"] + o)) for o in offsets]
     wm, _ = whitened_model(ctx, base._replace(noise=alt.noise), n_sims=0, seed=0)
-    Zw = whiten_columns(ctx, wm.spec, wm.theta,
-                        np.column_stack([ctx.block_columns(tm) for tm in terms]))
-    st = np.full(len(terms), -np.inf)
-    for j in range(len(terms)):
-        Q = _basis(Zw[:, j:j + 1], wm.Qx)
-        if Q is not None:
-            st[j] = float(np.sum((Q.T @ wm.r) ** 2))
+    st = local_stats(ctx, wm, terms, exact=True)
     b = int(np.argmax(st))
     if not np.isfinite(st[b]) or offsets[b] == 0.0:
         return alt
