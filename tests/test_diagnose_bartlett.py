@@ -5,11 +5,24 @@ zero) nothing piles up: the refitted ratio of a term the record does not hold
 is chi^2_dof, so the factor (mean of 20 simulated ratios / dof, floored at 1) must stay
 near 1. With a fixed seed, the mean of 20 chi^2_1 draws exceeds 2 with probability ~0.005.
 The walk case, where it must exceed 1, is in tests/test_loop_effects.py.
+
+Given the decision it feeds, the factor is estimated sequentially (batches of 20 until the
+decision is the same at +-2 standard errors, at most ``n_max``): a settled decision must
+leave the first batch's factor unchanged, an open one must average every batch.
 """
 
 from __future__ import annotations
 
-from fogbayes.diagnose.bartlett import bartlett_factor, in_walk_mode
+import itertools
+
+import numpy as np
+
+from fogbayes.diagnose.bartlett import (
+    BATCH_SEED,
+    bartlett_factor,
+    in_walk_mode,
+    null_ratios,
+)
 from fogbayes.diagnose.candidates import candidates_for
 from fogbayes.diagnose.context import make_context
 from fogbayes.diagnose.fitting import fit_terms
@@ -17,12 +30,29 @@ from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
 
 
-def test_the_factor_is_near_one_for_a_regular_ratio():
+def _white_record_with_drift():
     rec = make_record(None, seed=5, duration=10800.0, fs=1.0, noise="white").recording
     ctx = make_context(rec, target_blocks=600)
     base = fit_terms(ctx, base_terms(ctx, "bias-t"))
-    drift = [c for c in candidates_for(ctx, base.terms) if c.effect == "time_drift"][0]
+    drift = next(c for c in candidates_for(ctx, base.terms) if c.effect == "time_drift")
     alt = fit_terms(ctx, base.terms + tuple(drift.grid[:1]), spec=base.noise.spec)
+    return ctx, base, alt
+
+
+def test_the_factor_is_near_one_for_a_regular_ratio():
+    ctx, base, alt = _white_record_with_drift()
     assert not in_walk_mode(base)
     c = bartlett_factor(ctx, base, alt, 1, seed=3)
     assert 1.0 <= c < 2.0
+
+
+def test_the_sequential_factor_stops_when_settled_and_averages_every_batch_when_open():
+    ctx, base, alt = _white_record_with_drift()
+    kw = {"n_sims": 10, "seed": 3}  # small batches: this checks the bookkeeping, not the value
+    first = bartlett_factor(ctx, base, alt, 1, **kw)
+    assert bartlett_factor(ctx, base, alt, 1, decide=lambda c: True, **kw) == first
+    flips = itertools.cycle([True, False])  # never the same at both ends: always open
+    c = bartlett_factor(ctx, base, alt, 1, n_max=20, decide=lambda c: next(flips), **kw)
+    ratios = np.concatenate([null_ratios(ctx, base, alt, 10, seed=3 + BATCH_SEED * b)
+                             for b in range(2)])
+    assert c == max(1.0, float(ratios.mean())) != first

@@ -33,6 +33,22 @@ def test_lag_on_irregular_times_matches_a_fine_uniform_reference():
     np.testing.assert_allclose(first_order_lag(t, u, 120.0), ref, atol=1e-7)
 
 
+def test_a_lag_of_one_sensor_at_the_other_sensors_time_constant_is_the_gradient():
+    # Two sensors lagging one chamber temperature u by tau1 and tau2 (the simulator's
+    # thermal scenarios): partial fractions, 1/((1+tau2 s)(1+tau1 s)) =
+    # (tau2/(1+tau2 s) - tau1/(1+tau1 s)) / (tau2 - tau1), give
+    #     L_tau2[T1] = (tau2 T2 - tau1 T1) / (tau2 - tau1),   T1 = L_tau1[u], T2 = L_tau2[u],
+    # so with T1 in the model, thermal_lag (tau = tau2) and temperature_gradient (T2 - T1)
+    # span the same space: on such records the two effects cannot be told apart.
+    t = np.arange(0.0, 20000.0, 0.5)
+    u = np.interp(t, [0, 3000, 7000, 9000, 14000, 20000], [20, 20, 60, 60, -20, -20])
+    tau1, tau2 = 300.0, 900.0
+    T1, T2 = sim_lag(t, u, tau1), sim_lag(t, u, tau2)
+    closed = (tau2 * T2 - tau1 * T1) / (tau2 - tau1)
+    # T1 is not linear between samples: the ramp-invariant recursion is then O(h^2 / tau)
+    np.testing.assert_allclose(first_order_lag(t, T1, tau2), closed, atol=1e-5)
+
+
 def test_every_design_effect_has_a_candidate():
     thermal = make_context(make_record(None, seed=0, duration=3600.0, fs=1.0).recording)
     table = make_context(make_record(None, seed=0, duration=3600.0, fs=1.0,

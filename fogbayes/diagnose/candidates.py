@@ -19,6 +19,12 @@ alternatives, so a likelihood ratio compares them)::
 
 Grids are coarse (the screening max over a grid is calibrated by simulation); the chosen
 value is refined afterwards (:mod:`fogbayes.diagnose.refine`).
+
+Some candidates can be the same model: where channel j is itself a first-order lag (tau_j)
+of what channel 0 lags (tau_0), L_{tau_j}[T_0] = (tau_j T_j - tau_0 T_0) / (tau_j - tau_0)
+exactly, so ``thermal_lag`` at tau = tau_j and ``temperature_gradient`` span the same space
+once T_0 is in the model. The loop then cannot tell them apart and says so (the duel's
+"indistinguishable", :mod:`fogbayes.diagnose.compete`).
 """
 
 from __future__ import annotations

@@ -55,7 +55,8 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "from re-estimating the noise; a second screening without a random walk, made when "
         "the fit is in the walk mode, shortlists candidates, and gates one only if its refit "
         "drops the walk, in which case its ratio is divided by a bootstrap Bartlett factor "
-        "(mean refitted ratio / dof over 20 series simulated from the current fit), the walk "
+        "(mean refitted ratio / dof over series simulated from the current fit, 20 at a time "
+        "until the decision is the same at +-2 standard errors, at most 100), the walk "
         "variance piling up at zero when a slow term is offered); "
         "markov_noise (a noise component) takes chi^2_2 for its refitted ratio (its measured "
         "null). Supported candidates are ranked by the calibrated p-value of the refit, then "
@@ -117,8 +118,12 @@ def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand:
         lp = ev.calibrated_log_p(ev.log_chi2_sf(lr, s.dof), s.m_eff)
         if leaves_walk_mode(fit, alt):
             if ev.fw_log_p(lp, n_cand) < math.log(alpha):
-                c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed)
-                lp = ev.calibrated_log_p(ev.log_chi2_sf(lr / c, s.dof), s.m_eff)
+                def log_p(c: float) -> float:
+                    return ev.calibrated_log_p(ev.log_chi2_sf(lr / c, s.dof), s.m_eff)
+
+                c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed, decide=lambda c: ev.fw_log_p(
+                    log_p(c), n_cand) < math.log(alpha))
+                lp = log_p(c)
             s = s._replace(gate_log_p=None)
     return Trial(s, alt, lr, lp, ev.fw_log_p(lp, n_cand), c)
 
