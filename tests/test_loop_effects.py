@@ -5,10 +5,10 @@ base model: the loop must add that effect first and end within 10 % of the oracl
 10 s-block RMS (the true model fitted the same way); clean records must get nothing.
 The full study (several seeds, magnitudes 1-2x, four noise mixes, 1-10 Hz, 3-6 h) is in
 benchmarks/RESULTS_loop.md; measured there with the current rule on two seed sets: right
-effect first in 223 of 252 effect records (88 %; markov_noise at 1-2x its default: 10 of 24,
+effect first in 224 of 252 effect records (89 %; markov_noise at 1-2x its default: 10 of 24,
 mostly below the family-wise threshold at these sizes; thermal_lag 17 of 24, the rest kept
 the indistinguishable two-channel gradient and listed the lag as an alternative), final RMS
-within 10 % of the oracle in 251 of 252, nothing added on 142 of 144 clean records. Here
+within 10 % of the oracle in 252 of 252, nothing added on 142 of 144 clean records. Here
 every case passes with
 its fixed seed; records are short (3 h at 1 Hz) and effects 2-3x the simulator's
 defaults so that one seed is a fair test of the method, not of luck. Records come from
