@@ -121,8 +121,10 @@ def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand:
                 def log_p(c: float) -> float:
                     return ev.calibrated_log_p(ev.log_chi2_sf(lr / c, s.dof), s.m_eff)
 
-                c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed, decide=lambda c: ev.fw_log_p(
-                    log_p(c), n_cand) < math.log(alpha))
+                def passes(c: float) -> bool:
+                    return ev.fw_log_p(log_p(c), n_cand) < math.log(alpha)
+
+                c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed, decide=passes)
                 lp = log_p(c)
             s = s._replace(gate_log_p=None)
     return Trial(s, alt, lr, lp, ev.fw_log_p(lp, n_cand), c)
