@@ -49,16 +49,24 @@ DEFAULT_OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "loop_stu
 RATE_TABLE = ("scale_factor_nonlinearity", "scale_factor_asymmetry", "scale_factor_temperature")
 
 
+def _record(case: dict):
+    """The simulated test record of one study/sweep case (fogbayes.loop.testbed)."""
+    from fogbayes.loop.testbed import make_record
+
+    return make_record(case["effect"], seed=case["seed"], duration=case["duration"],
+                       fs=case["fs"], magnitude=case["magnitude"], noise=case["noise"],
+                       profile=case["profile"])
+
+
 def run_case(case: dict) -> dict:
     import fogbayes  # noqa: F401
     from fogbayes.diagnose.fitting import fit_terms
     from fogbayes.loop import run_loop
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.metrics import block_rms
-    from fogbayes.loop.testbed import make_record, oracle_terms
+    from fogbayes.loop.testbed import oracle_terms
 
-    tr = make_record(case["effect"], seed=case["seed"], duration=case["duration"], fs=case["fs"],
-                     magnitude=case["magnitude"], noise=case["noise"], profile=case["profile"])
+    tr = _record(case)
     t0 = time.time()
     res = run_loop(tr.recording, case["model"], max_steps=case.get("max_steps", 3), seed=case["seed"])
     wall = time.time() - t0
@@ -230,10 +238,9 @@ def oracle_case(case: dict) -> dict:
     from fogbayes.diagnose.context import make_context
     from fogbayes.diagnose.fitting import fit_terms
     from fogbayes.loop.bases import base_terms
-    from fogbayes.loop.testbed import make_record, oracle_terms
+    from fogbayes.loop.testbed import oracle_terms
 
-    tr = make_record(case["effect"], seed=case["seed"], duration=case["duration"], fs=case["fs"],
-                     magnitude=case["magnitude"], noise=case["noise"], profile=case["profile"])
+    tr = _record(case)
     ctx = make_context(tr.recording)
     base = base_terms(ctx, case["model"])
     fit0 = fit_terms(ctx, base)
@@ -401,10 +408,8 @@ def markov_case(case: dict) -> dict:
     from fogbayes.diagnose.fitting import fit_terms
     from fogbayes.diagnose.markov import refit_markov, screen_markov
     from fogbayes.loop.bases import base_terms
-    from fogbayes.loop.testbed import make_record
 
-    tr = make_record(case["effect"], seed=case["seed"], duration=case["duration"], fs=case["fs"],
-                     magnitude=case["magnitude"], noise=case["noise"], profile=case["profile"])
+    tr = _record(case)
     ctx = make_context(tr.recording)
     fit0 = fit_terms(ctx, base_terms(ctx, "bias-t"))  # the true deterministic model
     oracle = 2.0 * (_fixed_tau_fit(ctx, fit0, 300.0) - fit0.loglik)
