@@ -14,7 +14,10 @@ y = X beta + noise is ybar = Xbar beta + noise-bar.
 Temperature rate dT/dt (deg C/min, first channel): Savitzky-Golay (order 2) derivative of
 the block-mean temperature over ``rate_window_s`` (60 s by default: long enough that
 sensor noise and 0.01 deg C quantization stay below ~0.005 deg C/min, short against the
-~300 s sensor lags of chamber tests), interpolated back to every sample by a cubic spline.
+~300 s sensor lags of chamber tests), interpolated back to every sample by a cubic spline;
+near a corner of the chamber programme (a jump of d2T/dt2, found by a scan at family-wise
+alpha 0.01, :mod:`fogbayes.diagnose.corners`) the one-sided fit replaces it, so the kink of
+dT/dt is kept instead of rounded over the window.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from scipy.interpolate import CubicSpline
 from scipy.signal import savgol_filter
 
 from ..errors import TooShortError
+from .corners import keep_corners
 
 
 class Covariates(NamedTuple):
@@ -120,21 +124,48 @@ def _fill(x: np.ndarray, mask: np.ndarray, tb: np.ndarray) -> np.ndarray:
     return np.interp(tb, tb[ok], x[ok])
 
 
+def rate_window(grid: BlockGrid, window_s: float = 60.0) -> int:
+    """Savitzky-Golay window in blocks (odd, >= 5; 0 when the record is shorter than 5)."""
+    nb = grid.n
+    wl = round(window_s / grid.dt)
+    wl = max(5, wl + 1 - wl % 2)
+    if wl > nb:
+        wl = nb - 1 + nb % 2 if nb >= 5 else 0
+    return wl
+
+
+def block_temperature(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
+                      wl: int) -> tuple[np.ndarray, np.ndarray]:
+    """Block-mean temperature at the block centres and its slope (deg C/s) per block.
+
+    A block's mean is the temperature at its samples' mean time, which is off the centre in
+    a partial block or where a time stamp falls across a boundary; it is moved to the centre
+    to first order, Tb - slope (t_mean - t_centre), so that a steep ramp does not look
+    rough (on a 1 deg C/min ramp sampled at 10 Hz the offsets of 0.05 s made false corners).
+    """
+    Tb = _fill(grid.mean(T0), grid.mask, grid.t)
+    if wl < 5:
+        return Tb, np.gradient(Tb, grid.dt)
+    slope = savgol_filter(Tb, wl, 2, deriv=1, delta=grid.dt, mode="interp")
+    shift = _fill(grid.mean(t_rel), grid.mask, grid.t) - grid.t
+    if np.any(np.abs(shift) > 1e-9 * grid.dt):
+        Tb = Tb - slope * shift
+        slope = savgol_filter(Tb, wl, 2, deriv=1, delta=grid.dt, mode="interp")
+    return Tb, slope
+
+
 def temperature_rate(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
                      window_s: float = 60.0) -> np.ndarray:
-    """dT/dt (deg C/min) per sample: Savitzky-Golay slope of block means, interpolated."""
-    Tb = _fill(grid.mean(T0), grid.mask, grid.t)
-    wl = int(round(window_s / grid.dt))
-    wl = max(5, wl + 1 - wl % 2)
-    if wl > Tb.size:
-        wl = Tb.size - 1 + Tb.size % 2 if Tb.size >= 5 else 0
-    if wl < 5:
-        slope = np.gradient(Tb, grid.dt)
-    else:
-        slope = savgol_filter(Tb, wl, 2, deriv=1, delta=grid.dt, mode="interp")
+    """dT/dt (deg C/min) per sample: Savitzky-Golay slope of block means, interpolated,
+    with the chamber's corners kept (module docstring)."""
+    wl = rate_window(grid, window_s)
+    Tb, slope = block_temperature(grid, T0, t_rel, wl)
     # A cubic spline, not linear interpolation: kinks every block would put a comb of
     # lines at k / dt into every model that uses dT/dt.
-    return 60.0 * CubicSpline(grid.t, slope)(np.clip(t_rel, grid.t[0], grid.t[-1]))
+    rate = CubicSpline(grid.t, slope)(np.clip(t_rel, grid.t[0], grid.t[-1]))
+    if wl >= 5:  # the chamber's corners are real kinks: keep them (corners.py)
+        rate = keep_corners(grid.t, Tb, t_rel, rate, wl)
+    return 60.0 * rate
 
 
 def covariates_of(rec, grid: BlockGrid, *, rate_window_s: float = 60.0) -> Covariates:

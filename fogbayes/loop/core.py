@@ -8,7 +8,8 @@
         suggestive (p_familywise < 0.1) and d elpd_loo > 0; stop if none is
         rank the supported ones against each other (bootstrap duels, :mod:`.ranking`)
         and add the winner, listing the indistinguishable ones as alternatives
-        (an accepted step's time is then placed inside its block, :func:`polish_step`)
+        (an accepted step's time is then placed inside its block and a searched scale
+        re-scored under the refit's noise, :func:`fogbayes.diagnose.refine.polish`)
     scan the final residual for structure no candidate names (``unexplained``)
 
 See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
@@ -28,7 +29,7 @@ from ..diagnose.candidates import candidates_for
 from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
 from ..diagnose.markov import markov_log_p, refit_markov, screen_markov
-from ..diagnose.refine import polish_step, refine
+from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from ..inference import noise_ssm as ns
@@ -276,7 +277,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
             stop = Rejected(why["reason"], why.get("best") or {})
             break
         s = tr.screened
-        new = polish_step(ctx, fit, tr.fit)  # a step's time within its block (no-op otherwise)
+        new = polish(ctx, fit, tr.fit)  # a step's time, or a searched scale, under the refit
         m1 = _metrics(ctx, new, seed, cache)
         term = new.terms[-1] if s.candidate.kind != "noise" else None
         detail = _detail(new, term, rec, s)
