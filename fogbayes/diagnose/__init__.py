@@ -6,7 +6,10 @@
 * :mod:`.compete` -- candidates that explain the same residual, ranked by a bootstrap duel;
 * :mod:`.markov` -- the ``markov_noise`` noise-model candidate;
 * :mod:`.elpd` -- PSIS-LOO / WAIC through ArviZ;
-* :mod:`.scans` -- structure no candidate names (``unexplained``).
+* :mod:`.scans` -- structure no candidate names (``unexplained``);
+* :mod:`.covariates` / :mod:`.corners` -- the block grid and the drivers, dT/dt with the
+  chamber programme's corners kept;
+* :mod:`.refine` -- a searched value refined before the decision and polished after it.
 """
 
 from .candidates import EFFECTS, Candidate, candidates_for
