@@ -90,7 +90,7 @@ def find_corners(tb: np.ndarray, Tb: np.ndarray, n: int, alpha: float = ALPHA):
 
 def keep_corners(tb: np.ndarray, Tb: np.ndarray, t: np.ndarray, rate: np.ndarray,
                  n: int) -> np.ndarray:
-    """``rate`` (deg C/s, per sample at times ``t``) with the one-sided fit near corners."""
+    """``rate`` (deg C/s, per sample at times ``t``) with the kinked fit's slope near corners."""
     out = np.array(rate, dtype=float, copy=True)
     if Tb.size < 2:
         return out

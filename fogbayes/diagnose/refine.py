@@ -24,7 +24,7 @@ large effect moves that noise (the base fit's flicker and walk take up part of i
 16x hysteresis records of the loop's sweep, r0 refined to 0.058 where the refitted
 likelihood peaks at the true 0.05 (logL 1305.0 vs 1314.4, final RMS 1.12 x the oracle's).
 :func:`polish` re-scores such a value on a fine grid (ratio 1.5 either side, 25 values,
-re-centred up to :data:`POLISH_ROUNDS` times while the best is at an edge) under the refit's
+re-centred up to :data:`RECENTRE_ROUNDS` times while the best is at an edge) under the refit's
 noise and keeps the refit of the best if the likelihood rises, repeated under each new
 refit's noise until the value stops moving.
 """
@@ -43,6 +43,8 @@ STEP_SUBDIVISIONS = 20
 #: searched scale of each term kind that :func:`polish` re-scores after the decision
 SCALES = {"lag": "tau", "drift_exp": "tau", "hysteresis": "r0"}
 #: times the scale grid is re-centred while its best value is at an edge
+RECENTRE_ROUNDS = 4
+#: most refits :func:`polish` makes while the scale keeps moving
 POLISH_ROUNDS = 4
 
 
@@ -106,6 +108,17 @@ def refine(ctx: Context, wm: Whitened, s: Screened) -> tuple[Term, float]:
     return terms[b], float(st[b])
 
 
+def _whitened_under(ctx: Context, base: ModelFit, alt: ModelFit) -> Whitened:
+    """``base``'s design whitened under ``alt``'s noise: where the polish scores its terms."""
+    return whitened_model(ctx, base._replace(noise=alt.noise), n_sims=0, seed=0)[0]
+
+
+def _refit_if_better(ctx: Context, base: ModelFit, alt: ModelFit, term: Term) -> ModelFit:
+    """``base`` + ``term`` refitted from ``alt``'s noise; ``alt`` unless the likelihood rises."""
+    new = fit_terms(ctx, base.terms + (term,), spec=alt.noise.spec, theta0=alt.noise.theta)
+    return new if new.loglik > alt.loglik else alt
+
+
 def polish_step(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
     """``alt`` (``base`` + a step as its last term) with the step time placed within a block.
 
@@ -120,13 +133,11 @@ def polish_step(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
     dt = ctx.grid.dt
     offsets = dt * np.linspace(-1.0, 1.0, 2 * STEP_SUBDIVISIONS + 1)
     terms = [_with(term, time=float(term.params["time"] + o)) for o in offsets]
-    wm, _ = whitened_model(ctx, base._replace(noise=alt.noise), n_sims=0, seed=0)
-    st = local_stats(ctx, wm, terms, exact=True)
+    st = local_stats(ctx, _whitened_under(ctx, base, alt), terms, exact=True)
     b = int(np.argmax(st))
     if not np.isfinite(st[b]) or offsets[b] == 0.0:
         return alt
-    new = fit_terms(ctx, base.terms + (terms[b],), spec=alt.noise.spec, theta0=alt.noise.theta)
-    return new if new.loglik > alt.loglik else alt
+    return _refit_if_better(ctx, base, alt, terms[b])
 
 
 def polish_scale(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
@@ -138,9 +149,9 @@ def polish_scale(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
     key = SCALES.get(term.kind)
     if key is None:
         return alt
-    wm, _ = whitened_model(ctx, base._replace(noise=alt.noise), n_sims=0, seed=0)
+    wm = _whitened_under(ctx, base, alt)
     v0 = v = float(term.params[key])
-    for _ in range(POLISH_ROUNDS):
+    for _ in range(RECENTRE_ROUNDS):
         vals = np.geomspace(v / 1.5, v * 1.5, 25)
         st = local_stats(ctx, wm, [_with(term, **{key: float(x)}) for x in vals], exact=True)
         b = int(np.argmax(st))
@@ -151,9 +162,7 @@ def polish_scale(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
             break
     if v == v0:
         return alt
-    new = fit_terms(ctx, base.terms + (_with(term, **{key: v}),), spec=alt.noise.spec,
-                    theta0=alt.noise.theta)
-    return new if new.loglik > alt.loglik else alt
+    return _refit_if_better(ctx, base, alt, _with(term, **{key: v}))
 
 
 def polish(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
