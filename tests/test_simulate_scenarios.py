@@ -78,6 +78,23 @@ def test_planted_effect_equals_formula(name):
     assert np.ptp(tr.effects[name]) > 0  # the default size is not zero on this profile
 
 
+@pytest.mark.parametrize("scenario", ["thermal", "ratetable"])
+def test_a_bare_effect_name_the_scenario_has_is_planted_on_top(scenario):
+    """`simulate thermal --effect temperature_order` must not be the clean scenario: the
+    registry's cubic is added to the scenario's quadratic; given coefficients replace it."""
+    clean = simulate(scenario, seed=0, **SMALL[scenario])
+    rec, tr = simulate(scenario, seed=0, effects={"temperature_order": {}}, **SMALL[scenario])
+    T = tr.covariates.temperature
+    cubic = EFFECTS["temperature_order"].defaults["coeffs"][3]
+    # float64 rounding of the recorded output (rate-table outputs reach ~1e6 deg/h)
+    np.testing.assert_allclose(rec.output - clean.recording.output, cubic * (T - 20.0) ** 3,
+                               rtol=0, atol=1e-13 * np.max(np.abs(rec.output)) + 1e-14)
+    assert tr.params["effects"]["temperature_order"]["coeffs"] == [0.5, 0.01, 2e-4, cubic]
+    own = simulate(scenario, seed=0, effects={"temperature_order": {"coeffs": [1.0]}},
+                   **SMALL[scenario]).truth
+    np.testing.assert_allclose(own.effects["temperature_order"], 1.0)
+
+
 def test_thermal_lag_effect_and_markov_effect():
     rec, tr = simulate("thermal", seed=0, effects={"thermal_lag": {"tau": 600.0},
                                                    "markov_noise": {"sigma": 0.1}},

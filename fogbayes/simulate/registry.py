@@ -105,6 +105,32 @@ def resolve(name: str, params: dict | None, cov: Covariates) -> dict[str, Any]:
     return full
 
 
+def on_top(name: str, own: dict, cov: Covariates) -> dict[str, Any]:
+    """Parameters of effect ``name`` at its registry default *added to* the scenario's ``own``.
+
+    Naming an effect that the scenario's model already has, without parameters, must plant
+    something the declared model lacks -- ``fogbayes simulate thermal --effect
+    temperature_order`` is otherwise the clean scenario. For ``temperature_order`` the
+    polynomials add, coefficient by coefficient (same ``T_ref``)::
+
+        sum_i (a_i + c_i) (T - T_ref)^i     a: the scenario's, c: the registry default
+
+    Other effects have no meaningful sum; they keep the scenario's parameters.
+    """
+    mine = resolve(name, own, cov)
+    if name != "temperature_order":
+        return mine
+    extra = resolve(name, None, cov)
+    if extra["T_ref"] != mine["T_ref"]:
+        raise SimulationParameterError(
+            "temperature_order on top of the scenario's needs the same T_ref",
+            column=name, fix=f"give the full coefficients with T_ref {mine['T_ref']}")
+    a, c = list(mine["coeffs"]), list(extra["coeffs"])
+    n = max(len(a), len(c))
+    a, c = a + [0.0] * (n - len(a)), c + [0.0] * (n - len(c))
+    return {**mine, "coeffs": [float(x + y) for x, y in zip(a, c)]}
+
+
 def effect_rate(name: str, cov: Covariates, params: dict) -> np.ndarray:
     """Deterministic effect ``name`` in deg/h with the full parameters ``params``."""
     return np.broadcast_to(EFFECTS[name].fn(cov, params), cov.time.shape).astype(float)

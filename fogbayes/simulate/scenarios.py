@@ -23,7 +23,7 @@ from . import effects as fx
 from . import profiles as pf
 from ._checks import SimulationParameterError, positive, seed_int
 from .noise import allan_noise, arma_noise, markov_noise, sinusoid
-from .registry import EFFECTS, effect_rate, resolve
+from .registry import EFFECTS, effect_rate, on_top, resolve
 from .truth import Covariates, Simulated, Truth
 
 #: Scenario names and one-line descriptions (listed by ``fogbayes simulate``).
@@ -203,6 +203,10 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
             tables the dwell is sized so the grid fits in ``duration``).
         effects: extra effects by name -> parameters (deg/h), merged over the scenario's
             defaults and each effect's default parameters; ``{name: None}`` removes one.
+            A bare name (``{}``) of an effect the scenario's model already has adds the
+            effect's default on top (thermal/ratetable ``temperature_order``: the registry's
+            cubic on top of the scenario's quadratic, :func:`registry.on_top`); given
+            parameters replace the scenario's.
         noise: replaces the scenario's noise: Allan terms ``Q N B K R`` (canonical units,
             see :mod:`~fogbayes.simulate.noise`) and optional ``markov`` {sigma, tau_c},
             ``arma`` {phi, theta, sigma}, ``sinusoid`` {amplitude, frequency, phase}, all
@@ -250,7 +254,11 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
         if name in comps:
             raise SimulationParameterError(f"'{name}' is part of the scenario's model",
                                            column="effects", fix="use an effect name")
-        full = resolve(name, {**base.effects.get(name, {}), **params}, cov)
+        own = base.effects.get(name)
+        if own is not None and params == {} and name in (effects or {}):
+            full = on_top(name, own, cov)  # a bare name adds the effect to the scenario's
+        else:
+            full = resolve(name, {**(own or {}), **params}, cov)
         used[name] = full
         if EFFECTS[name].fn is None:  # markov_noise: stochastic, drawn with its own stream
             noise_parts[name] = k * markov_noise(n, fs_, seed=_sub(seed, name), **full)
