@@ -56,3 +56,17 @@ def test_a_fast_line_above_the_block_nyquist_is_reported():
     clean = Recording(time=t, output=rng.standard_normal(n), meta=Metadata(sample_rate=fs))
     cctx = make_context(clean, target_blocks=800)
     assert not scan_unexplained(cctx, fit_terms(cctx, [Term("intercept", {})]), seed=0)
+
+
+def test_a_noise_model_at_its_bound_is_reported_as_unexplained():
+    """Paper 000's rate table under the default composite orders (linear scale, quadratic
+    bias) leaves the scale's T x W^k products and the operating-time drift in the residual:
+    the random walk goes to the top of its range. The paper's own orders leave it free."""
+    from fogbayes.diagnose.scans import noise_bound_scan
+    from fogbayes.simulate import simulate
+
+    ctx = make_context(simulate("paper000", seed=0, dwell=20.0).recording)
+    short = noise_bound_scan(fit_terms(ctx, base_terms(ctx, "composite")))
+    assert [u["detail"]["component"] for u in short] == ["random_walk"]
+    assert short[0]["kind"] == "noise_model_at_bound"
+    assert noise_bound_scan(fit_terms(ctx, base_terms(ctx, "composite", "2,3,2,2"))) == []

@@ -17,6 +17,12 @@ noise model and passed through the same GLS fit, p = (1 + #{sims >= observed}) /
 * ``change_point``: CUSUM of the whitened residual (mean) and of its square (variance),
   max_k |S_k| / sqrt(n).
 * ``autocorrelation``: Ljung-Box Q over lags 1..20 of the whitened residual.
+* ``noise_model_at_bound``: a flicker or random-walk variance of the fitted noise model at
+  the *upper* end of its search range (:data:`fogbayes.inference.noise_ssm.LOG_BOUNDS`):
+  the residual holds more slow structure than any noise of that kind, so the evidence of
+  every step is unreliable (measured: paper 000's scenario under the default composite
+  orders keeps the walk at its bound through six steps, and the sixth raised the 10 s RMS
+  from 204 to 521 deg/h). No test: the bound is reached or not.
 """
 
 from __future__ import annotations
@@ -204,9 +210,30 @@ def autocorrelation_scan(white: np.ndarray, alpha: float, lags: int = 20) -> lis
     return []
 
 
+def noise_bound_scan(fit: ModelFit, tol: float = 1e-3) -> list[dict]:
+    """Noise variances at the upper end of their range (module doc)."""
+    spec = fit.noise.spec
+    p = ns.unpack(spec, fit.noise.theta)
+    parts = ([("flicker", float(p.log_flicker))] if spec.bank_taus else []) + \
+        ([("rw", float(p.log_rw))] if spec.random_walk else [])
+    out = []
+    for name, value in parts:
+        hi = ns.LOG_BOUNDS[name][1]
+        if value >= hi - tol:
+            out.append({"kind": "noise_model_at_bound", "detail": {
+                "component": {"rw": "random_walk", "flicker": "flicker"}[name],
+                "log_variance_ratio": value, "upper_bound": hi,
+                "note": "the fitted noise takes up as much slow structure as it can: the "
+                        "residual holds an effect no candidate names and the evidence of "
+                        "each step is unreliable; declare more of the model (--orders) or "
+                        "read the other scans"}})
+    return out
+
+
 def scan_unexplained(ctx: Context, fit: ModelFit, *, seed: int = 0, alpha: float = 0.01,
                      n_sims: int = 200) -> list[dict]:
     """All scans of the final residual; returns the ``unexplained`` entries."""
     _, white = _sim_residuals(ctx, fit, n_sims, seed + 31)
-    return (covariate_scans(ctx, fit, alpha) + spectral_scans(ctx, fit, white, alpha)
-            + change_point_scans(ctx, white, alpha) + autocorrelation_scan(white, alpha))
+    return (noise_bound_scan(fit) + covariate_scans(ctx, fit, alpha)
+            + spectral_scans(ctx, fit, white, alpha) + change_point_scans(ctx, white, alpha)
+            + autocorrelation_scan(white, alpha))

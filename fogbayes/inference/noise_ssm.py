@@ -45,7 +45,7 @@ Array = jax.Array
 BANK_PER_DECADE = 2.0
 BANK_SPAN = (0.5, 2.0)  # (x dt, x duration): the simulator's flicker reaches 1/T
 UNROLL = 1  # compile time matters more than the last 25 % of scan speed
-_LOG_BOUNDS = {"flicker": (-25.0, 12.0), "rw": (-30.0, 8.0), "mvar": (-18.0, 12.0)}
+LOG_BOUNDS = {"flicker": (-25.0, 12.0), "rw": (-30.0, 8.0), "mvar": (-18.0, 12.0)}
 
 
 class NoiseSpec(NamedTuple):
@@ -119,10 +119,10 @@ def pack(spec: NoiseSpec, p: NoiseParams) -> np.ndarray:
 def bounds(spec: NoiseSpec) -> list[tuple[float, float]]:
     b = []
     if spec.bank_taus:
-        b.append(_LOG_BOUNDS["flicker"])
+        b.append(LOG_BOUNDS["flicker"])
     if spec.random_walk:
-        b.append(_LOG_BOUNDS["rw"])
-    b += [_LOG_BOUNDS["mvar"]] * spec.n_markov
+        b.append(LOG_BOUNDS["rw"])
+    b += [LOG_BOUNDS["mvar"]] * spec.n_markov
     b += [(math.log(spec.dt / 2.0), math.log(spec.tau_max))] * spec.n_markov
     return b
 
