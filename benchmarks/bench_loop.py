@@ -58,32 +58,42 @@ def _record(case: dict):
                        profile=case["profile"])
 
 
-def run_case(case: dict) -> dict:
-    import fogbayes  # noqa: F401
+def loop_row(case: dict, res, wall: float) -> dict:
+    """The study row of one loop run: what it added first, its evidence, RMS before/after."""
+    first = res.steps[0].evidence if res.steps else {}
+    return dict(case, added=res.effects, rms_initial=res.initial.rms, rms_final=res.final.rms,
+                wall_s=wall, stop=res.stop.reason,
+                alternatives=[a["effect"] for a in first.get("alternatives", [])],
+                duels=[{k: d[k] for k in ("leader", "other", "d_2loglik_other_minus_leader",
+                                          "p_leader", "p_other", "verdict")}
+                       for d in first.get("duels", [])],
+                first_log10_p_fw=first["log10_p_familywise"] if res.steps else
+                (res.stop.evidence or {}).get("log10_p_familywise"))
+
+
+def oracle_rms(res, model: str, effect: str, params: dict) -> float:
+    """10 s-block RMS of the true model (base + the planted effect at its true parameters),
+    fitted on the loop's own context as the loop fits its models."""
     from fogbayes.diagnose.fitting import fit_terms
-    from fogbayes.loop import run_loop
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.metrics import block_rms
     from fogbayes.loop.testbed import oracle_terms
 
+    ctx = res.context
+    ofit = fit_terms(ctx, oracle_terms(ctx, base_terms(ctx, model), effect, params))
+    return block_rms(ctx.cov.t, ofit.residual, ctx.outlier)
+
+
+def run_case(case: dict) -> dict:
+    import fogbayes  # noqa: F401
+    from fogbayes.loop import run_loop
+
     tr = _record(case)
     t0 = time.time()
     res = run_loop(tr.recording, case["model"], max_steps=case.get("max_steps", 3), seed=case["seed"])
-    wall = time.time() - t0
-    out = dict(case, added=res.effects, rms_initial=res.initial.rms, rms_final=res.final.rms,
-               wall_s=wall, stop=res.stop.reason,
-               alternatives=[a["effect"] for a in res.steps[0].evidence.get("alternatives", [])]
-               if res.steps else [],
-               duels=[{k: d[k] for k in ("leader", "other", "d_2loglik_other_minus_leader",
-                                         "p_leader", "p_other", "verdict")}
-                      for d in res.steps[0].evidence.get("duels", [])] if res.steps else [],
-               first_log10_p_fw=res.steps[0].evidence["log10_p_familywise"] if res.steps else
-               (res.stop.evidence or {}).get("log10_p_familywise"))
+    out = loop_row(case, res, time.time() - t0)
     if case["effect"] is not None:
-        ctx = res.context
-        base = base_terms(ctx, case["model"])
-        ofit = fit_terms(ctx, oracle_terms(ctx, base, case["effect"], tr.effect_params))
-        out["rms_oracle"] = block_rms(ctx.cov.t, ofit.residual, ctx.outlier)
+        out["rms_oracle"] = oracle_rms(res, case["model"], case["effect"], tr.effect_params)
     return out
 
 
@@ -168,18 +178,17 @@ def summarise(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def run_cases(todo: list[dict], out: str, workers: int) -> list[dict]:
-    """Run the cases not yet in ``out`` (a JSON list of rows, rewritten after each case)."""
+def run_cases(todo: list[dict], out: str, workers: int, fn=run_case) -> list[dict]:
+    """Run ``fn`` on the cases not yet in ``out`` (a JSON list of rows, rewritten after each)."""
     done = json.load(open(out)) if os.path.exists(out) else []
     seen = {json.dumps({k: r[k] for k in todo[0]}, sort_keys=True) for r in done}
     todo = [c for c in todo if json.dumps(c, sort_keys=True) not in seen]
     print(f"{len(todo)} cases to run ({len(done)} already done)", flush=True)
     with ProcessPoolExecutor(workers) as pool:
-        for r in pool.map(run_case, todo):
+        for r in pool.map(fn, todo):
             done.append(r)
             json.dump(done, open(out, "w"), indent=1, default=float)
-            print(r["effect"], r["model"], r["magnitude"], r["noise"], r["fs"], r["seed"], "->",
-                  r["added"], f"{r['wall_s']:.1f}s", flush=True)
+            print(*(r[k] for k in todo[0]), "->", r["added"], f"{r['wall_s']:.1f}s", flush=True)
     return done
 
 

@@ -25,11 +25,9 @@ base lacks at its registry default: seeds 0-1, 6 clean records.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -56,46 +54,20 @@ SCENARIO = {"bias-t": "thermal", "thermal": "paper004"}
 def default_case(case: dict) -> dict:
     """One `simulate SCENARIO --effect NAME` record through the loop, with the oracle's RMS."""
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.fitting import fit_terms
     from fogbayes.loop import run_loop
-    from fogbayes.loop.bases import base_terms
-    from fogbayes.loop.metrics import block_rms
-    from fogbayes.loop.testbed import oracle_terms
     from fogbayes.simulate.scenarios import simulate
 
-    eff = case["effect"]
-    model = case["model"]
+    eff, model = case["effect"], case["model"]
     sim = simulate(SCENARIO[model], seed=case["seed"], effects={eff: {}} if eff else None)
     t0 = time.time()
     res = run_loop(sim.recording, model, max_steps=3, seed=case["seed"])
-    out = dict(case, added=res.effects, rms_initial=res.initial.rms, rms_final=res.final.rms,
-               wall_s=time.time() - t0, stop=res.stop.reason,
-               alternatives=[a["effect"] for a in res.steps[0].evidence.get("alternatives", [])]
-               if res.steps else [])
+    out = bl.loop_row(case, res, time.time() - t0)
     if eff is not None:
-        ctx = res.context
-        base = base_terms(ctx, model)
         params = dict(sim.truth.params["effects"][eff])
         if eff == "temperature_order":  # the planted part: the cubic on top of the quadratic
             params = {"coeffs": [0.0, 0.0, 0.0, params["coeffs"][3]], "T_ref": params["T_ref"]}
-        ofit = fit_terms(ctx, oracle_terms(ctx, base, eff, params))
-        out["rms_oracle"] = block_rms(ctx.cov.t, ofit.residual, ctx.outlier)
+        out["rms_oracle"] = bl.oracle_rms(res, model, eff, params)
     return out
-
-
-def run_scenario_cases(todo: list[dict], out: str, workers: int) -> list[dict]:
-    """Run the (effect, model, seed) cases not yet in ``out`` with :func:`default_case`."""
-    key = lambda r: (r["effect"], r["model"], r["seed"])
-    done = json.load(open(out)) if os.path.exists(out) else []
-    seen = {key(r) for r in done}
-    todo = [c for c in todo if key(c) not in seen]
-    print(f"{len(todo)} cases to run ({len(done)} already done)", flush=True)
-    with ProcessPoolExecutor(workers) as pool:
-        for r in pool.map(default_case, todo):
-            done.append(r)
-            json.dump(done, open(out, "w"), indent=1, default=float)
-            print(r["effect"], r["seed"], "->", r["added"], f"{r['wall_s']:.1f}s", flush=True)
-    return done
 
 
 def main() -> None:
@@ -109,13 +81,15 @@ def main() -> None:
     if args.what == "setups":
         rows = bl.run_cases(setup_cases(), out, args.workers)
     elif args.what == "defaults":
-        rows = run_scenario_cases([dict(effect=eff, model="bias-t", seed=sd)
-                                   for eff in bl.THERMAL + (None,)
-                                   for sd in (range(3) if eff else range(6))], out, args.workers)
+        rows = bl.run_cases([dict(effect=eff, model="bias-t", seed=sd)
+                             for eff in bl.THERMAL + (None,)
+                             for sd in (range(3) if eff else range(6))], out, args.workers,
+                            fn=default_case)
     else:
-        rows = run_scenario_cases([dict(effect=eff, model="thermal", seed=sd)
-                                   for eff in bl.THERMAL + (None,) if eff != "temperature_rate"
-                                   for sd in (range(2) if eff else range(6))], out, args.workers)
+        rows = bl.run_cases([dict(effect=eff, model="thermal", seed=sd)
+                             for eff in bl.THERMAL + (None,) if eff != "temperature_rate"
+                             for sd in (range(2) if eff else range(6))], out, args.workers,
+                            fn=default_case)
     print(bl.summarise([dict(r, profile="thermal") for r in rows]))
 
 
