@@ -77,3 +77,19 @@ def test_bias_t_without_temperature_is_exit_code_2(tmp_path, capsys):
     assert rc == 2
     err = capsys.readouterr().err
     assert "temperature" in err and "--model allan" in err
+
+
+def test_unexplained_structure_is_named_on_stderr(tmp_path, capsys):
+    """Paper 000's table under the default composite orders: the walk is at its bound and
+    the residual holds structure; the status line says so (not only the JSON)."""
+    from fogbayes.simulate import simulate
+
+    save(simulate("paper000", seed=0, dwell=20.0).recording, tmp_path / "p000.csv")
+    rc = cli.main(["loop", str(tmp_path / "p000.csv"), "--model", "composite", "--max-steps",
+                   "0", "--json", str(tmp_path / "l.json"), "--compensated",
+                   str(tmp_path / "c.csv")])
+    assert rc == 0
+    kinds = {u["kind"] for u in json.loads((tmp_path / "l.json").read_text())["unexplained"]}
+    assert "noise_model_at_bound" in kinds
+    err = capsys.readouterr().err
+    assert "unexplained:" in err and "noise_model_at_bound" in err

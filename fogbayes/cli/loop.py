@@ -78,3 +78,6 @@ def loop(
     added = ", ".join(res.effects) or "nothing"
     say(f"{model}: added {added}; 10 s RMS {res.initial.rms:.4g} -> {res.final.rms:.4g} deg/h "
         f"({res.stop.reason})")
+    if res.unexplained:  # structure no candidate names: say so where the user looks first
+        kinds = sorted({u["kind"] for u in res.unexplained})
+        say(f"unexplained: {', '.join(kinds)} (see 'unexplained' in the JSON)")
