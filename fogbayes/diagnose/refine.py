@@ -1,10 +1,12 @@
 """Refine a screened candidate's searched parameter between its grid neighbours.
 
-The screening grid is coarse; the value that is finally added is the maximiser of the
-same fixed-noise statistic (2 dlogL, see :mod:`fogbayes.diagnose.evidence`) on a fine
-local grid, all evaluated in one filter pass:
+The screening grid of a scale or a frequency is coarse; the value that is finally added is
+the maximiser of the same fixed-noise statistic (2 dlogL, see
+:mod:`fogbayes.diagnose.evidence`) on a fine local grid, all evaluated in one filter pass:
 
-* step time: every block boundary between the neighbouring grid times;
+* step time: every block boundary between the neighbouring grid times. The step grid is
+  already every block boundary (:func:`fogbayes.diagnose.candidates.time_candidates`), so
+  this only re-checks the two adjacent boundaries; it is kept for grids built otherwise;
 * tau (thermal_lag, time_drift), r0 (thermal_hysteresis): 25 log-spaced values spanning
   the neighbouring grid values;
 * frequency (periodic): 41 values within +-1 bin of the zero-padded FFT peak. A phase
