@@ -35,6 +35,10 @@ def loop(
                                     "composite 's1,s2,u0[,u1]' (default 0,0,2)."),
     alpha: float = typer.Option(0.01, help="Family-wise false-effect level of each step."),
     seed: int = typer.Option(0, help="Seed of the bootstrap calibration and ELPD draws."),
+    noise_prior: Path = typer.Option(
+        None, "--noise-prior",
+        help="Cap the random walk by a static run: a 'fogbayes allan --json' document "
+             "(its K interval's upper end) or {\"K\": value} in deg/h^1.5."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
@@ -53,6 +57,9 @@ def loop(
       fogbayes loop table.csv -m composite --max-steps 3 \\
           --json loop.json --compensated rates.csv
       fogbayes -q loop chamber.csv -m bias-t --json - --compensated comp.csv
+      fogbayes allan static.csv --json static.json
+      fogbayes loop chamber.csv -m bias-t --noise-prior static.json \\
+          --json loop.json --compensated comp.csv
     """
     from ..data.io import write_csv_mixed
     from ..errors import FogbayesError
@@ -61,11 +68,17 @@ def loop(
     if not 0.0 < alpha < 0.5:
         raise FogbayesError(f"alpha={alpha} is outside (0, 0.5)", column="--alpha",
                             fix="use e.g. --alpha 0.01")
+    prior = None
+    if noise_prior is not None:
+        from ..diagnose.noise_prior import read_noise_prior
+
+        prior = read_noise_prior(noise_prior)
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=output_unit, scale_factor=scale_factor,
                          temperature=temperature, input_rate=input_rate)
     with progress(f"closed loop on {rec_path.name} ({model})"):
-        res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed)
+        res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed,
+                       noise_prior=prior)
     write_json(res.to_json(), json_out)
     write_csv_mixed(compensated, res.compensated)
     if json_out != "-":
@@ -75,6 +88,8 @@ def loop(
 
         loop_report(res, report, title=f"Closed loop: {rec_path.name}")
         say(f"wrote {report}")
+    if prior is not None:
+        say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")
     added = ", ".join(res.effects) or "nothing"
     say(f"{model}: added {added}; 10 s RMS {res.initial.rms:.4g} -> {res.final.rms:.4g} deg/h "
         f"({res.stop.reason})")

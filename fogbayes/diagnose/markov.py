@@ -52,16 +52,25 @@ def _alt_theta(spec: ns.NoiseSpec, theta: np.ndarray, logvar: float, logtau: flo
     return ns.pack(alt, q)
 
 
-def _grid(ctx: Context) -> tuple[np.ndarray, np.ndarray]:
-    taus = np.geomspace(2.0 * ctx.grid.dt, max(ctx.cov.duration / 4.0, 8.0 * ctx.grid.dt), N_TAU)
-    return taus, np.geomspace(1e-3, 1e3, N_VAR)
+def _grid(ctx: Context, spec: ns.NoiseSpec) -> tuple[np.ndarray, np.ndarray] | None:
+    """(tau_c, v) screening grid inside the spec's bounds (a noise prior may cap both)."""
+    lo_tau = 2.0 * ctx.grid.dt
+    hi_tau = min(max(ctx.cov.duration / 4.0, 8.0 * ctx.grid.dt), spec.tau_max)
+    hi_v = min(1e3, math.exp(spec.log_mvar_max))
+    if hi_tau <= lo_tau or hi_v <= 1e-3:
+        return None
+    return np.geomspace(lo_tau, hi_tau, N_TAU), np.geomspace(1e-3, hi_v, N_VAR)
 
 
 def screen_markov(ctx: Context, fit: ModelFit, wm: Whitened, *, n_sims: int = 100,
                   seed: int = 0) -> Screened | None:
-    """Screen ``markov_noise`` (see module doc); None if the record is too short for it."""
+    """Screen ``markov_noise`` (see module doc); None if the record is too short for it,
+    or a noise prior leaves no room for it."""
     spec, theta = fit.noise.spec, fit.noise.theta
-    taus, vs = _grid(ctx)
+    grid = _grid(ctx, spec)
+    if grid is None:
+        return None
+    taus, vs = grid
     alt = _alt(spec)
     thetas = [_alt_theta(spec, theta, -60.0, math.log(taus[0]))]
     thetas += [_alt_theta(spec, theta, math.log(v), math.log(t)) for t in taus for v in vs]

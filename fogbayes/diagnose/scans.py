@@ -22,7 +22,9 @@ noise model and passed through the same GLS fit, p = (1 + #{sims >= observed}) /
   the residual holds more slow structure than any noise of that kind, so the evidence of
   every step is unreliable (measured: paper 000's scenario under the default composite
   orders keeps the walk at its bound through six steps, and the sixth raised the 10 s RMS
-  from 204 to 521 deg/h). No test: the bound is reached or not.
+  from 204 to 521 deg/h). No test: the bound is reached or not. Under a noise prior the
+  walk's bound is the prior's cap (:mod:`fogbayes.diagnose.noise_prior`), and reaching it
+  says the record wanders more than the static run allows.
 """
 
 from __future__ import annotations
@@ -210,7 +212,7 @@ def autocorrelation_scan(white: np.ndarray, alpha: float, lags: int = 20) -> lis
     return []
 
 
-def noise_bound_scan(fit: ModelFit, tol: float = 1e-3) -> list[dict]:
+def noise_bound_scan(fit: ModelFit, tol: float = 1e-2) -> list[dict]:
     """Noise variances at the upper end of their range (module doc)."""
     spec = fit.noise.spec
     p = ns.unpack(spec, fit.noise.theta)
@@ -218,15 +220,21 @@ def noise_bound_scan(fit: ModelFit, tol: float = 1e-3) -> list[dict]:
         ([("rw", float(p.log_rw))] if spec.random_walk else [])
     out = []
     for name, value in parts:
-        hi = ns.LOG_BOUNDS[name][1]
+        hi = spec.log_rw_max if name == "rw" else ns.LOG_BOUNDS[name][1]
         if value >= hi - tol:
+            capped = name == "rw" and hi < ns.LOG_BOUNDS["rw"][1]
+            note = ("the random walk sits at the cap of the noise prior: the record wanders "
+                    "more than the static run allows, so it holds an effect no candidate "
+                    "names, or the prior does not fit this record (another sensor or "
+                    "environment); read the other scans" if capped else
+                    "the fitted noise takes up as much slow structure as it can: the "
+                    "residual holds an effect no candidate names and the evidence of "
+                    "each step is unreliable; declare more of the model (--orders) or "
+                    "read the other scans")
             out.append({"kind": "noise_model_at_bound", "detail": {
                 "component": {"rw": "random_walk", "flicker": "flicker"}[name],
                 "log_variance_ratio": value, "upper_bound": hi,
-                "note": "the fitted noise takes up as much slow structure as it can: the "
-                        "residual holds an effect no candidate names and the evidence of "
-                        "each step is unreliable; declare more of the model (--orders) or "
-                        "read the other scans"}})
+                "bound": "noise prior" if capped else "search range", "note": note}})
     return out
 
 

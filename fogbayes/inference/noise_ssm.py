@@ -53,7 +53,10 @@ class NoiseSpec(NamedTuple):
 
     dt: block step (s); bank_taus: flicker-bank time constants (s), () = no flicker;
     n_markov: number of free Gauss-Markov components; random_walk: include a random walk;
-    tau_max: upper bound of a free Markov time constant (s).
+    tau_max: upper bound of a free Markov time constant (s); log_rw_max, log_mvar_max: upper
+    bounds of the random walk's and of a free Markov component's log variance ratio (caps
+    from a noise prior, :mod:`fogbayes.diagnose.noise_prior`; by default the top of
+    :data:`LOG_BOUNDS`).
     """
 
     dt: float
@@ -61,6 +64,8 @@ class NoiseSpec(NamedTuple):
     n_markov: int = 0
     random_walk: bool = True
     tau_max: float = 1e5
+    log_rw_max: float = LOG_BOUNDS["rw"][1]
+    log_mvar_max: float = LOG_BOUNDS["mvar"][1]
 
     @property
     def n_state(self) -> int:
@@ -121,8 +126,8 @@ def bounds(spec: NoiseSpec) -> list[tuple[float, float]]:
     if spec.bank_taus:
         b.append(LOG_BOUNDS["flicker"])
     if spec.random_walk:
-        b.append(LOG_BOUNDS["rw"])
-    b += [LOG_BOUNDS["mvar"]] * spec.n_markov
+        b.append((LOG_BOUNDS["rw"][0], spec.log_rw_max))
+    b += [(LOG_BOUNDS["mvar"][0], spec.log_mvar_max)] * spec.n_markov
     b += [(math.log(spec.dt / 2.0), math.log(spec.tau_max))] * spec.n_markov
     return b
 

@@ -29,6 +29,7 @@ from ..diagnose.candidates import candidates_for
 from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
 from ..diagnose.markov import markov_log_p, refit_markov, screen_markov
+from ..diagnose.noise_prior import NoisePrior
 from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
@@ -243,7 +244,8 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
 
 def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps: int = 5,
              alpha: float = ev.ALPHA, seed: int = 0, n_sims: int = 300, n_refit: int = 3,
-             effects: tuple[str, ...] | None = None, target_blocks: int = 2500) -> LoopResult:
+             effects: tuple[str, ...] | None = None, target_blocks: int = 2500,
+             noise_prior: NoisePrior | None = None) -> LoopResult:
     """Run the closed loop on a :class:`~fogbayes.data.Recording` from base ``model``.
 
     Args:
@@ -253,19 +255,25 @@ def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps
         seed: seed of the bootstrap calibration and the ELPD draws; n_sims: simulated null
             series per step; n_refit: candidates refitted per step (plus markov_noise).
         effects: restrict the candidate names; target_blocks: block-grid size.
+        noise_prior: a cap on the random walk from a static run
+            (:mod:`fogbayes.diagnose.noise_prior`), applied to every fit of the loop.
     """
     with single_thread_blas():
         return _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
-                    target_blocks)
+                    target_blocks, noise_prior)
 
 
 def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
-         target_blocks) -> LoopResult:
+         target_blocks, noise_prior) -> LoopResult:
     allowed = tuple(e for e in ALLOWED[model] if effects is None or e in effects) \
         if model in ALLOWED else effects
     opts = Options(max_steps, alpha, n_sims, n_refit, seed, allowed, target_blocks)
     ctx = make_context(rec, target_blocks=target_blocks)
-    fit = fit_terms(ctx, base_terms(ctx, model, orders, source=rec.meta.source))
+    base = base_terms(ctx, model, orders, source=rec.meta.source)
+    fit = fit_terms(ctx, base)
+    if noise_prior is not None:  # the cap is on the absolute walk: it needs the white level
+        ctx = ctx._replace(spec=noise_prior.capped(ctx.spec, fit.noise.sigma2))
+        fit = fit_terms(ctx, base)
     fit0 = fit
     cache: dict = {}
     m0 = _metrics(ctx, fit, seed, cache)
@@ -288,7 +296,8 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     if model == "allan":
         unexplained += _allan_story(rec, ctx, steps)
     comp = compensate(rec, ctx, fit, model)
-    return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE)
+    return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE,
+                      noise_prior)
 
 
 def _allan_story(rec, ctx: Context, steps: list[Step]) -> list[dict]:

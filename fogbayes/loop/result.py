@@ -6,7 +6,8 @@
      "steps": [{"effect", "covariates", "detail", "evidence", "rms_before", "rms_after"}],
      "final": {"rms", "bias_stability", "elpd"}, "unexplained": [{"kind", "detail"}]}
 
-(rms and bias stability in deg/h, elpd in nats of the block-mean predictive density).
+(rms and bias stability in deg/h, elpd in nats of the block-mean predictive density), plus
+``"noise_prior"`` when the loop ran under one (:mod:`fogbayes.diagnose.noise_prior`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 from .._json import to_jsonable
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
+from ..diagnose.noise_prior import NoisePrior
 from ..diagnose.terms import Term
 from .metrics import Metrics
 
@@ -57,6 +59,7 @@ class LoopResult(NamedTuple):
     context: Context
     compensated: dict[str, np.ndarray]
     rule: str
+    noise_prior: NoisePrior | None = None
 
     @property
     def effects(self) -> list[str]:
@@ -69,5 +72,8 @@ class LoopResult(NamedTuple):
         steps = [{"effect": s.effect, "covariates": list(s.covariates), "detail": s.detail,
                   "evidence": s.evidence, "rms_before": s.rms_before, "rms_after": s.rms_after}
                  for s in self.steps]
-        return to_jsonable({"model": self.model, "initial": m(self.initial), "steps": steps,
-                            "final": m(self.final), "unexplained": self.unexplained})
+        doc = {"model": self.model, "initial": m(self.initial), "steps": steps,
+               "final": m(self.final), "unexplained": self.unexplained}
+        if self.noise_prior is not None:  # an assumption every number above depends on
+            doc["noise_prior"] = self.noise_prior.to_json(self.context.grid.dt)
+        return to_jsonable(doc)
