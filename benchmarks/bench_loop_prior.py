@@ -5,7 +5,7 @@ Usage::
     python benchmarks/bench_loop_prior.py [--workers 2] [--out benchmarks/loop_prior.json]
 
 The sweep's 0.5x warm-ups (config A: scenario noise N 0.005, B 0.02, K 0.02; 10 Hz, 3 h;
-a 0.25 deg/h warm-up, tau 1.5 h; seeds 200-202) are missed 2 times in 3 without a prior,
+a 0.5 deg/h warm-up, tau 1.5 h; seeds 200-202) are missed 2 times in 3 without a prior,
 the base fit's random walk taking them up. Each record, and the clean record of the same
 seed, is run under two priors made from a simulated 12 h static run of the same noise
 (seed 5000 + seed) through ``fogbayes.workflow.allan.fit_recording`` -- what

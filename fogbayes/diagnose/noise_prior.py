@@ -2,10 +2,11 @@
 
 One record cannot tell a slow deterministic excursion (a warm-up, a thermal transient)
 from a rate random walk: both have a 1/f^2 spectrum and similar Allan deviations, and only
-the exact shape tells them apart. With the walk free, the noise model of the base fit can
-take up a 0.5 deg/h warm-up as a walk of K ~ 0.25 deg/h^1.5 (ten times a FOG's), the
-warm-up's evidence is then calibrated under that walk, and it is missed (loop sweep, 0.5x
-warm-ups: final RMS 3.1-3.8x the oracle's, benchmarks/RESULTS_loop.md). A static run of the
+the exact shape tells them apart. With the walk free, the base fit's walk takes up part of
+a 0.5 deg/h warm-up (on the loop sweep's records a cap at K = 0.12 deg/h^1.5 did not bind
+and 0.06 barely did, against a true 0.02), the warm-up's evidence is then calibrated under
+that walk, and it is missed (0.5x warm-ups: 2 of 3, final RMS 3.05-3.77x the oracle's;
+benchmarks/RESULTS_loop.md). A static run of the
 same sensor says how large its walk can be; DESIGN.md ("constrain the noise by what the
 record itself says about it ... priors"). The loop then bounds the walk by it:
 
@@ -27,7 +28,8 @@ sigma and time constant tau_c has its largest ADEV, 0.618 sigma, at tau = 1.89 t
     sigma <= max ADEV_high(tau) / 0.618 over tau >= 0.95 dt,
     tau_c <= longest tau of the static run / 1.89
 
-(log_mvar <= log(sigma_max^2 / s2); the loop's Markov time constants start at dt / 2, so
+(log_mvar <= log(sigma_max^2 / s2) on the state's variance, which block averaging only
+lowers, so the cap errs loose; the loop's Markov time constants start at dt / 2, so
 their peaks lie at tau >= 0.95 dt, and the short-tau ADEV of white noise does not loosen the
 cap): a larger or slower component would have shown in the static run's ADEV. A bare
 ``{"K": ...}`` leaves the Markov component free.
