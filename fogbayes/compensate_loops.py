@@ -16,6 +16,7 @@ where the XLA program returns a new array that the caller then copies.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from functools import lru_cache
 
@@ -37,6 +38,13 @@ def _source(terms: tuple[tuple[int, ...], ...]) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: Numba's default threading layer (workqueue: the only one a pip install is sure to have)
+#: must not be entered by two Python threads at once (numba docs, "The Threading Layers"),
+#: and a caller may run compensation from its own thread pool, so launches are serialised.
+#: Each launch already uses every core, so nothing is lost.
+_LAUNCH = threading.Lock()
+
+
 @lru_cache(maxsize=64)
 def _compiled(terms: tuple[tuple[int, ...], ...]) -> Callable:
     space: dict = {"prange": numba.prange}
@@ -50,7 +58,8 @@ def compensate_into(basis, coef, z, y, out=None) -> np.ndarray:
     y = np.asarray(y)
     z = np.asarray(z, dtype=y.dtype).reshape(y.shape[0], -1)
     out = np.empty_like(y) if out is None else out
-    _compiled(basis.terms)(out, y, z, np.asarray(coef, dtype=y.dtype),
-                           np.asarray(basis.centre, dtype=y.dtype),
-                           np.asarray(basis.scale, dtype=y.dtype))
+    kernel = _compiled(basis.terms)
+    with _LAUNCH:
+        kernel(out, y, z, np.asarray(coef, dtype=y.dtype), np.asarray(basis.centre, dtype=y.dtype),
+               np.asarray(basis.scale, dtype=y.dtype))
     return out
