@@ -119,5 +119,5 @@ def test_a_walk_piling_up_at_zero_does_not_make_a_drift():
     assert best["likelihood_ratio"] == refit["likelihood_ratio"]  # the evidence is the drift's
     assert best["bartlett_factor"] > 1.3
     uncorrected = ev.fw_log_p(ev.calibrated_log_p(ev.log_chi2_sf(best["likelihood_ratio"], 1),
-                                                  best["m_eff"]), n)
+                                                  best["m_eff"]), best["n_candidates"])
     assert uncorrected < math.log(ev.ALPHA) < best["log10_p_familywise"] * math.log(10)
