@@ -17,7 +17,7 @@ Compiled once per compensator (a fit), ~0.3 s.
 
 from __future__ import annotations
 
-import numba
+from ._numba import numba
 import numpy as np
 
 from .compensate_composite import RESID_ABS, RESID_REL

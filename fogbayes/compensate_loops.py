@@ -20,7 +20,7 @@ import threading
 from collections.abc import Callable
 from functools import lru_cache
 
-import numba
+from ._numba import numba
 import numpy as np
 
 

@@ -26,12 +26,13 @@ Sums run in sample order (NumPy sums pairwise), so results agree with the NumPy 
 rounding, ~1e-15 relative (tests/test_batch_kernels.py). Covariates are stored
 covariate-major, z (S, c, n): each covariate of a sensor is one contiguous row, as the
 per-sensor min/max and the block means read them. ``cache=True``: the machine code is
-stored beside this file, so only a first process pays the compilation.
+stored in the user's cache folder (:mod:`fogbayes._numba`), so only a first process pays
+the compilation.
 """
 
 from __future__ import annotations
 
-import numba
+from .._numba import numba
 import numpy as np
 from numba import prange
 

@@ -16,7 +16,7 @@ a (sensors, n) rate array, sensors in parallel::
 
 from __future__ import annotations
 
-import numba
+from .._numba import numba
 import numpy as np
 from numba import prange
 
