@@ -10,7 +10,8 @@ import typer
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      write_json)
+                      refuse_overwrite, write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 
 def summary_document(rec, rec_path) -> dict:
@@ -30,6 +31,27 @@ def summary_document(rec, rec_path) -> dict:
     }
 
 
+def text_summary(doc: dict) -> str:
+    """The printed summary: what a calibration engineer checks before fitting."""
+    dur = doc["duration_s"]
+    span = f"{dur / 3600:.3g} h" if dur >= 3600 else f"{dur:.4g} s"
+    gaps = f"{len(doc['gaps'])} gap(s)" if doc["gaps"] else "no gaps"
+    lines = [f"{doc['file']}: sensor {doc['sensor_id']!r}, {doc['n']} samples, {span} at "
+             f"{doc['sample_rate_hz']:.4g} Hz, {gaps}",
+             f"  output ({doc['unit']}): mean {doc['output_mean']:.6g}, "
+             f"std {doc['output_std']:.4g}"
+             + (f", scale factor {doc['scale_factor']:.6g} per deg/s" if doc["scale_factor"] else "")]
+    if doc["temperatures"]:
+        for name, r in doc["temperatures"].items():
+            lines.append(f"  {name}: {r['min']:.4g} ... {r['max']:.4g} degC")
+    else:
+        lines.append("  no temperature channel (thermal models need one)")
+    if doc["input_rate"] is not None:
+        lines.append(f"  input_rate: {doc['input_rate']['min']:.6g} ... "
+                     f"{doc['input_rate']['max']:.6g} deg/s")
+    return "\n".join(lines)
+
+
 @app.command()
 def info(
     rec_path: Path = REC_ARG,
@@ -37,10 +59,13 @@ def info(
                                  "document ('-' = stdout, instead of the text summary)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Summarise a recording: samples, rate, gaps, temperature and output ranges.
@@ -52,14 +77,17 @@ def info(
       fogbayes info gyro.csv --output-unit deg/s --time-column t_s
       fogbayes info run.csv --json - > info.json
     """
+    refuse_overwrite({"the recording": rec_path}, {"--json": json_out})
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=output_unit, scale_factor=scale_factor,
-                         temperature=temperature, input_rate=input_rate)
+                         temperature=temperature, input_rate=input_rate,
+                         time_unit=time_unit, temperature_scale=temperature_scale,
+                         temperature_offset=temperature_offset)
     s = rec.sampling()
     if json_out:
         write_json(summary_document(rec, rec_path), json_out)
     if json_out != "-":
-        typer.echo(repr(rec))
+        typer.echo(text_summary(summary_document(rec, rec_path)))
         if s.gaps:
             longest = max(s.gaps, key=lambda g: g.duration)
             typer.echo(f"{len(s.gaps)} gap(s) kept as they are (never interpolated); longest "

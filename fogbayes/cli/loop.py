@@ -17,7 +17,8 @@ import typer
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      progress, say, write_json)
+                      progress, refuse_overwrite, say, write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 
 @app.command(name="loop")
@@ -41,10 +42,13 @@ def loop(
              "(its K interval's upper end) or {\"K\": value} in deg/h^1.5."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Run fit -> diagnose -> add effect -> refit until nothing more is supported.
@@ -65,6 +69,8 @@ def loop(
     from ..errors import FogbayesError
     from ..loop import run_loop
 
+    refuse_overwrite({"the recording": rec_path, "the --noise-prior document": noise_prior},
+                     {"--json": json_out, "--compensated": compensated, "--report": report})
     if not 0.0 < alpha < 0.5:
         raise FogbayesError(f"alpha={alpha} is outside (0, 0.5)", column="--alpha",
                             fix="use e.g. --alpha 0.01")
@@ -75,7 +81,9 @@ def loop(
         prior = read_noise_prior(noise_prior)
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=output_unit, scale_factor=scale_factor,
-                         temperature=temperature, input_rate=input_rate)
+                         temperature=temperature, input_rate=input_rate,
+                         time_unit=time_unit, temperature_scale=temperature_scale,
+                         temperature_offset=temperature_offset)
     with progress(f"closed loop on {rec_path.name} ({model})"):
         res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed,
                        noise_prior=prior)
@@ -91,8 +99,11 @@ def loop(
     if prior is not None:
         say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")
     added = ", ".join(res.effects) or "nothing"
-    say(f"{model}: added {added}; 10 s RMS {res.initial.rms:.4g} -> {res.final.rms:.4g} deg/h "
-        f"({res.stop.reason})")
+    reason = res.stop.reason
+    if res.effects and reason.startswith("no candidate"):  # after additions: none *further*
+        reason = "no further" + reason[len("no"):]
+    say(f"{model}: added {added}; 10 s RMS {res.initial.rms:.4g} -> {res.final.rms:.4g} deg/h; "
+        f"stopped: {reason}")
     if res.unexplained:  # structure no candidate names: say so where the user looks first
         kinds = sorted({u["kind"] for u in res.unexplained})
         say(f"unexplained: {', '.join(kinds)} (see 'unexplained' in the JSON)")
