@@ -176,11 +176,26 @@ def compensate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halle
     return _result(p, sc, box, U, T, t, method=method, iterations=iterations)
 
 
+@partial(jax.jit, static_argnames=("method", "iterations"))
 def compensate_sensors(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",
                        iterations: int = 2) -> CompensationResult:
-    """Many sensors at once: every argument has a leading sensor axis (k, ...)."""
+    """Many sensors at once: every argument has a leading sensor axis (k, ...).
+
+    Compiled once per shape, dtype and (method, iterations): the coefficients are
+    arguments, so new sensors reuse the program.
+    """
     f = partial(_result, method=method, iterations=iterations)
-    return jax.jit(jax.vmap(f))(p, sc, box, U, T, t)
+    return jax.vmap(f)(p, sc, box, U, T, t)
+
+
+@partial(jax.jit, static_argnames=("method", "iterations"))
+def _draw_rates(p_draws: FullParams, sc: Scaling, box, U, T, t, eps, *, method: str,
+                iterations: int):
+    """W_s = U^-1(U - eps_s; theta_s) for every draw s (leading axis of p_draws, eps)."""
+    def one(p, e):
+        return _rate(p, sc, box, U - e, T, t, method=method, iterations=iterations)
+
+    return jax.vmap(one)(p_draws, eps)
 
 
 def compensate_draws(p_draws: FullParams, sc: Scaling, box, U, T, t, *, key,
@@ -191,7 +206,8 @@ def compensate_draws(p_draws: FullParams, sc: Scaling, box, U, T, t, *, key,
     For each posterior draw theta_s (leading axis of ``p_draws``) and, if ``noise_sd``
     (scaled output units, one per draw) is given, a fresh output noise draw xi_s, the
     rate W_s = U^-1(U - xi_s; theta_s). Returns (median, lower, upper) of W_s per sample
-    (central ``prob`` interval). Memory is draws x samples: chunk long records.
+    (central ``prob`` interval). Memory is draws x samples: chunk long records. The
+    program is compiled once per shape: data and draws are arguments, not constants.
     """
     n_draws = p_draws.M.shape[0]
     U = jnp.asarray(U)
@@ -200,8 +216,7 @@ def compensate_draws(p_draws: FullParams, sc: Scaling, box, U, T, t, *, key,
     else:
         eps = jax.random.normal(key, (n_draws,) + U.shape, U.dtype)
         eps = eps * (jnp.asarray(noise_sd, U.dtype) * sc.U_scale).reshape((-1,) + (1,) * U.ndim)
-    f = partial(_rate, method=method, iterations=iterations)
-    W = jax.jit(jax.vmap(lambda p, e: f(p, sc, box, U - e, T, t)))(p_draws, eps)
+    W = _draw_rates(p_draws, sc, box, U, T, t, eps, method=method, iterations=iterations)
     # a draw that cannot invert a sample (NaN) is left out of that sample's quantiles
     q = jnp.nanquantile(W, jnp.array([0.5, (1 - prob) / 2, (1 + prob) / 2]), axis=0)
     return q[0], q[1], q[2]

@@ -165,3 +165,25 @@ def test_posterior_interval_covers_the_truth():
 def test_bad_method_raises():
     with pytest.raises(MethodError, match="method"):
         _comp("secant")
+
+
+def test_batched_compensators_compile_once_per_shape():
+    """New coefficients, outputs or draws reuse the compiled program (they are arguments):
+    rebuilding jit(vmap(...)) per call cost ~800 ms against ~5 ms compiled once."""
+    compensate_sensors.clear_cache()
+    scs = Scaling(*[jnp.array([v, v]) for v in SC])
+    box = jnp.array([monotone_box(P, (-30, 60), SC)] * 2)
+    Ts, ts = jnp.stack([TG, TG]), jnp.stack([TT, TT])
+    for k in range(3):
+        stack = jax.tree_util.tree_map(lambda a: jnp.stack([a, a * (1 + 1e-3 * k)]), P)
+        compensate_sensors(stack, scs, box, jnp.stack([U, U + k]), Ts, ts)
+    assert compensate_sensors._cache_size() == 1
+    from fogbayes.compensate_composite import _draw_rates
+
+    _draw_rates.clear_cache()
+    one_box = jnp.asarray(monotone_box(P, (-30, 60), SC))
+    for k in range(3):
+        draws = jax.tree_util.tree_map(lambda a: jnp.stack([a * (1 + 1e-4 * j) for j in range(4)]), P)
+        compensate_draws(draws, SC, one_box, U + 0.1 * k, TG, TT, key=jax.random.PRNGKey(k),
+                         noise_sd=np.full(4, 1e-5 * (k + 1)))
+    assert _draw_rates._cache_size() == 1
