@@ -101,12 +101,14 @@ def n_workers(client) -> int:
 def run_tasks(fn: Callable[[Any], Any], items: Sequence[Any], *, engine: str = "local",
               address: str | None = None, workers: int = 2,
               on_done: Callable[[Any], None] | None = None,
-              on_error: Callable[[Any, BaseException], Any] | None = None) -> dict:
+              on_error: Callable[[Any, BaseException], Any] | None = None,
+              on_start: Callable[[], None] | None = None) -> dict:
     """``fn`` over ``items`` on ``engine``; returns ``{"results": [...], "workers": n}``.
 
     ``on_done(result)`` is called as each item finishes (progress bars); ``on_error(item,
     exc)`` turns an exception that escaped ``fn`` (or a lost worker) into that item's
-    result -- without it, the exception propagates.
+    result -- without it, the exception propagates. ``on_start()`` is called once the
+    engine is up (the cluster reached), just before the first item is run.
     """
     check_engine(engine, address, workers)
     items = list(items)
@@ -118,6 +120,8 @@ def run_tasks(fn: Callable[[Any], Any], items: Sequence[Any], *, engine: str = "
         return on_error(item, exc)
 
     if engine == "local":
+        if on_start is not None:
+            on_start()
         results = []
         for item in items:
             try:
@@ -131,6 +135,8 @@ def run_tasks(fn: Callable[[Any], Any], items: Sequence[Any], *, engine: str = "
     from distributed import as_completed
 
     with dask_client(address, workers) as client:
+        if on_start is not None:
+            on_start()
         # pure=False: a rerun of the same file is new work, never a cached key
         futures = client.map(fn, items, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}

@@ -3,13 +3,16 @@
 ``find_recordings(DIR, pattern)`` lists the files of ``DIR`` (not its subfolders) that
 match one of the comma-separated glob patterns, sorted by name, so that every engine sees
 the recordings (and writes the summary rows) in the same order. Outputs a previous run
-wrote into ``DIR`` itself (``*.compensated.csv``) are skipped: they are not recordings.
+wrote into ``DIR`` itself (``*.compensated.csv``) are skipped: they are not recordings; so
+are the hidden temporary files of an unfinished write (``.<stem>.tmp-*``, left only by a
+SIGKILL, see :mod:`fogbayes.data.atomic`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from ..data.atomic import is_temp_name
 from ..errors import FogbayesError
 
 #: What a batch task can be asked to do to each recording.
@@ -28,12 +31,15 @@ def find_recordings(folder: str | Path, pattern: str = "*.csv") -> list[Path]:
     if not folder.is_dir():
         what = "is a file, not a folder" if folder.exists() else "no such folder"
         raise FleetError(what, file=str(folder),
-                         fix="pass the folder that holds the recordings (e.g. runs/)")
+                         fix=f"pass the folder that holds the recordings, or make one: mkdir "
+                             f"{folder} && fogbayes simulate thermal --seed 1 --out "
+                             f"{folder / 'unit1.csv'}")
     patterns = [p.strip() for p in str(pattern).split(",") if p.strip()]
     if not patterns:
         raise FleetError("empty --pattern", column="--pattern", fix="use e.g. --pattern '*.csv'")
     found = {p for pat in patterns for p in folder.glob(pat)
-             if p.is_file() and not p.name.endswith(_OUTPUT_SUFFIXES)}
+             if p.is_file() and not p.name.endswith(_OUTPUT_SUFFIXES)
+             and not is_temp_name(p.name)}
     if not found:
         raise FleetError(f"no recordings match '{pattern}'", file=str(folder),
                          fix="put .csv/.parquet/.npz recordings there or change --pattern")

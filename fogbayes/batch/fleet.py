@@ -14,6 +14,21 @@ one row per recording, in file-name order whatever the engine. A recording that 
 ``error`` row; the run goes on. Input that makes the whole run impossible (no folder, no
 recordings, unknown task/model/engine, an unreachable scheduler) raises
 :class:`.files.FleetError` before any work.
+
+Re-running into the same OUT never leaves a mix of two runs beside a summary:
+
+* every file is written atomically (:mod:`fogbayes.data.atomic`): the old one or the new
+  one, never a part (with ``engine="dask"``, a worker process killed hard by its nanny can
+  leave a hidden ``.<stem>.tmp-*`` file, never a partial file under a final name);
+* the earlier ``summary.json`` is removed when the work starts, and the new one is written
+  last, once every recording is done: ``OUT/summary.json`` exists only for a run that
+  finished (a killed run leaves none);
+* each recording's outputs from an earlier run that this run did not write are removed
+  (``<stem>.fit.json``, ``.compensated.csv``, ``.loop.json``, ``.html``): a recording that
+  fails now keeps no old fit beside the new results -- its row in the summary holds the
+  error instead -- and outputs of another task (a ``.compensated.csv`` made with an older
+  fit) go too. The row lists what was removed under ``removed_stale``. Files of recordings
+  that are not part of this run, and any other file in OUT, are left alone.
 """
 
 from __future__ import annotations
@@ -31,6 +46,7 @@ from .jobs import (
     error_row,
     fit_outputs,
     load_one,
+    output_names,
     run_one,
     write_json,
 )
@@ -57,22 +73,54 @@ def run_batch(folder: str | Path, *, model: str, out: str | Path, task: str = "f
     opts = as_options(options)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+
+    def start() -> None:  # the work begins: the old summary no longer describes OUT
+        (out / "summary.json").unlink(missing_ok=True)
+
     t0 = time.perf_counter()
     if vectorize:
+        start()
         rows, n_workers = _vectorized(files, model, task, out, opts, solver, on_done), 1
     else:
         job = partial(run_one, model=model, task=task, out_dir=str(out), options=opts)
         done = run_tasks(job, [str(f) for f in files], engine=engine, address=address,
-                         workers=workers, on_done=on_done, on_error=error_row)
+                         workers=workers, on_done=on_done, on_error=error_row, on_start=start)
         rows, n_workers = done["results"], done["workers"]
+    _remove_stale(out, rows, files)
     n_ok = sum(r["status"] == "ok" for r in rows)
     summary = {"fogbayes_version": fogbayes.__version__, "task": task, "model": model,
                "engine": engine, "address": address, "workers": n_workers,
                "vectorized": bool(vectorize), "folder": str(folder), "pattern": pattern,
                "options": opts._asdict(), "n_files": len(rows), "n_ok": n_ok,
                "n_error": len(rows) - n_ok, "seconds": time.perf_counter() - t0, "rows": rows}
-    write_json(summary, out / "summary.json")
+    write_json(summary, out / "summary.json")  # last: its presence means the run finished
     return summary
+
+
+def _remove_stale(out: Path, rows: list[dict], inputs) -> None:
+    """Remove each recording's outputs of an earlier run that this run did not write."""
+    import os
+
+    keep = set()
+    for f in inputs:
+        try:
+            keep.add(Path(f).resolve())
+        except OSError:
+            pass
+    for row in rows:
+        written = set((row.get("outputs") or {}).values()) if row["status"] == "ok" else set()
+        removed = []
+        for name in output_names(Path(row["file"]).stem):
+            p = out / name
+            if name in written or not p.is_file() or p.resolve() in keep:
+                continue
+            try:
+                os.remove(p)
+            except FileNotFoundError:
+                continue
+            removed.append(name)
+        if removed:
+            row["removed_stale"] = removed
 
 
 def _vectorized(files, model, task, out, opts: JobOptions, solver, on_done) -> list[dict]:

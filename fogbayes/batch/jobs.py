@@ -63,13 +63,22 @@ def as_options(options: JobOptions | dict | None) -> JobOptions:
     return JobOptions(**options)
 
 
-def write_json(obj: Any, path: Path) -> Path:
-    """The JSON text the command line writes (``fogbayes fit --json``), quietly."""
-    from .._json import to_jsonable
+#: The files each task writes per recording, ``<stem><suffix>`` in OUT (see the module doc).
+OUTPUT_SUFFIXES = {"fit": (".fit.json",), "compensate": (".fit.json", ".compensated.csv"),
+                   "loop": (".loop.json", ".compensated.csv"), "report": (".html",)}
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(to_jsonable(obj), indent=2) + "\n")
-    return path
+
+def output_names(stem: str) -> list[str]:
+    """Every per-recording output name any task writes for the recording ``stem``."""
+    return sorted({stem + sfx for sfxs in OUTPUT_SUFFIXES.values() for sfx in sfxs})
+
+
+def write_json(obj: Any, path: Path) -> Path:
+    """The JSON text the command line writes (``fogbayes fit --json``), quietly, atomically."""
+    from .._json import to_jsonable
+    from ..data.atomic import write_text
+
+    return write_text(Path(path), json.dumps(to_jsonable(obj), indent=2) + "\n")
 
 
 def error_message(exc: BaseException) -> str:
@@ -140,7 +149,6 @@ def _report(rec, path, model, out_dir, opts: JobOptions, task: str) -> dict:
     from ..workflow.report import build_report
 
     out = out_dir / f"{Path(path).stem}.html"
-    out.parent.mkdir(parents=True, exist_ok=True)
     build_report(rec, out, model=model, bayes=opts.bayes, seed=opts.seed,
                  title=f"Calibration report: {Path(path).name}")
     return {"outputs": {"report": out.name}}

@@ -2,12 +2,17 @@
 
 Every subcommand lives in its own module and registers itself on :data:`app`. ``main``
 turns a :class:`~fogbayes.errors.FogbayesError` (bad input) into one line on stderr and
-exit code 2, never a traceback.
+exit code 2, never a traceback. SIGTERM is turned into ``SystemExit(143)`` while a command
+runs (as Ctrl-C is into ``KeyboardInterrupt``), so that the atomic writers of
+:mod:`fogbayes.data.atomic` remove their temporary files: a killed command leaves the old
+output or none, never a truncated one.
 """
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 
 import typer
 
@@ -27,8 +32,20 @@ def _root(quiet: bool = typer.Option(False, "--quiet", "-q",
 from . import allan, arma, batch, compensate, demo, fit, info, loop, report, simulate  # noqa: E402,F401
 
 
+class Terminated(SystemExit):
+    """Raised by the SIGTERM handler: the command unwinds and exits with 128 + 15 = 143."""
+
+
+def _terminated(signum, frame):
+    """SIGTERM: unwind like an exception (cleanup and ``finally`` blocks run), exit 143."""
+    raise Terminated(128 + signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``fogbayes`` script; returns the exit code."""
+    installed, previous = False, None
+    if threading.current_thread() is threading.main_thread():
+        previous, installed = signal.signal(signal.SIGTERM, _terminated), True
     try:
         # standalone mode: click prints usage errors itself and exits with code 2.
         app(args=argv, prog_name="fogbayes", standalone_mode=True)
@@ -36,7 +53,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fogbayes: error: {exc}", file=sys.stderr)
         return 2
     except SystemExit as exc:
+        if isinstance(exc, Terminated):
+            print("fogbayes: terminated (SIGTERM); unfinished outputs were not written",
+                  file=sys.stderr)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    finally:
+        if installed:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
     return 0
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from contextlib import contextmanager
 from pathlib import Path
@@ -15,6 +16,7 @@ from .._json import (
     to_jsonable,  # the one sanitiser (fogbayes/_json.py), re-exported here
 )
 from ..data import Recording, load
+from ..errors import FogbayesError
 
 #: Messages for people go to stderr so that `--json -` keeps stdout clean.
 console = Console(stderr=True)
@@ -26,8 +28,13 @@ REC_ARG = typer.Argument(..., help="Recording file (.csv, .parquet or .npz).", s
 _INPUT = "Reading the recording"
 COLUMN_OPT = typer.Option("output", "--column", help="Gyro output column.",
                           rich_help_panel=_INPUT)
-TIME_COLUMN_OPT = typer.Option("time", "--time-column", help="Time column (s).",
+TIME_COLUMN_OPT = typer.Option("time", "--time-column",
+                               help="Time column (in --time-unit, default s).",
                                rich_help_panel=_INPUT)
+TIME_UNIT_OPT = typer.Option("s", "--time-unit",
+                             help="Unit of the time column: s, ms, us or ns (converted to s), "
+                                  "e.g. --time-column 'time (ms)' --time-unit ms.",
+                             rich_help_panel=_INPUT)
 OUTPUT_UNIT_OPT = typer.Option(None, "--output-unit",
                                help="Output unit: deg/h, deg/s, rad/s, V, mV or Hz "
                                     "(default: the file's '# unit:' line, else deg/h).",
@@ -42,6 +49,14 @@ TEMPERATURE_OPT = typer.Option(None, "--temperature",
 INPUT_RATE_OPT = typer.Option("input_rate", "--input-rate-column",
                               help="Reference-rate column (deg/s), used when present.",
                               rich_help_panel=_INPUT)
+TEMPERATURE_SCALE_OPT = typer.Option(1.0, "--temperature-scale",
+                                     help="Temperatures are read as SCALE x value + OFFSET "
+                                          "deg C (raw sensor words; values outside -100 ... "
+                                          "200 deg C are refused).",
+                                     rich_help_panel=_INPUT)
+TEMPERATURE_OFFSET_OPT = typer.Option(0.0, "--temperature-offset",
+                                      help="Added after --temperature-scale (kelvin: -273.15).",
+                                      rich_help_panel=_INPUT)
 
 
 def _quiet(value: bool) -> bool:
@@ -59,22 +74,99 @@ QUIET_OPT = typer.Option(False, "--quiet", "-q", callback=_quiet,
 def load_recording(path: Path, *, column: str = "output", time_column: str = "time",
                    output_unit: str | None = None, scale_factor: float | None = None,
                    temperature: list[str] | None = None,
-                   input_rate: str = "input_rate") -> Recording:
+                   input_rate: str = "input_rate", time_unit: str = "s",
+                   temperature_scale: float = 1.0,
+                   temperature_offset: float = 0.0) -> Recording:
     """Load a Recording with the command line's column/unit overrides."""
-    return load(path, time=time_column, output=column, unit=output_unit,
-                scale_factor=scale_factor, temperature=temperature or None,
-                input_rate=input_rate)
+    from ..errors import ArgumentError
+
+    try:
+        return load(path, time=time_column, output=column, unit=output_unit,
+                    scale_factor=scale_factor, temperature=temperature or None,
+                    input_rate=input_rate, time_unit=time_unit,
+                    temperature_scale=temperature_scale, temperature_offset=temperature_offset)
+    except ArgumentError as exc:  # name the command-line flag, not fogbayes.load's keyword
+        flag = "--" + (exc.column or "").lstrip("-").replace("_", "-")
+        if exc.column not in ("temperature_scale", "temperature_offset", "scale_factor"):
+            raise
+        raise ArgumentError(exc.problem.replace(exc.column, flag), column=flag,
+                            fix=(exc.fix or "").replace(exc.column, flag)) from None
 
 
 def write_json(obj: Any, out: Path | str) -> None:
-    """Write ``obj`` as JSON to ``out``; ``-`` means stdout."""
+    """Write ``obj`` as JSON to ``out``, atomically (:mod:`fogbayes.data.atomic`); ``-``
+    means stdout."""
+    from ..data.atomic import write_text
+
     text = json.dumps(to_jsonable(obj), indent=2)
     if str(out) == "-":
         sys.stdout.write(text + "\n")
     else:
-        Path(out).parent.mkdir(parents=True, exist_ok=True)
-        Path(out).write_text(text + "\n")
+        write_text(out, text + "\n")
         say(f"wrote {out}")
+
+
+class OverwriteError(FogbayesError):
+    """An output path names an input of the same command (or another output)."""
+
+
+def _paths(value) -> list[Path]:
+    if value is None:
+        return []
+    if isinstance(value, (str, os.PathLike)):
+        return [] if str(value) in ("", "-") else [Path(value)]
+    return [p for v in value for p in _paths(v)]
+
+
+def _keys(p: Path) -> list:
+    """What identifies the file ``p``: its resolved path and, if it exists, its inode (so
+    that symbolic and hard links to the same file match)."""
+    keys: list = [p.resolve()]
+    try:
+        st = os.stat(p)
+        keys.append((st.st_dev, st.st_ino))
+    except OSError:
+        pass
+    return keys
+
+
+def refuse_overwrite(inputs: dict[str, Any], outputs: dict[str, Any]) -> None:
+    """Refuse an output that is an input of the same command, a folder holding one, or the
+    same file as another output -- before any work, so the input is never touched.
+
+    ``inputs`` and ``outputs`` map a name for people (``"the recording"``, ``"--json"``) to a
+    path, a list of paths, ``None`` or ``"-"`` (stdout: skipped). Paths are compared after
+    :meth:`~pathlib.Path.resolve` and by inode (:func:`os.path.samefile`'s test) when they
+    exist, so symbolic and hard links to an input count. Raises :class:`OverwriteError`
+    (exit code 2). Linear in the number of paths (a batch names thousands).
+    """
+    seen_in: dict = {}
+    holders: dict = {}  # resolved folders that hold an input -> that input
+    for what, src in ((n, p) for n, v in inputs.items() for p in _paths(v)):
+        for key in _keys(src):
+            seen_in.setdefault(key, (what, src))
+        for parent in src.resolve().parents:
+            holders.setdefault(parent, (what, src))
+    seen_out: dict = {}
+    for flag, out in ((n, p) for n, v in outputs.items() for p in _paths(v)):
+        keys = _keys(out)
+        alt = out.with_name(f"{out.stem}_out{out.suffix}")
+        hit = next((seen_in[k] for k in keys if k in seen_in), None)
+        how = "is"
+        if hit is None and keys[0] in holders:
+            hit, how = holders[keys[0]], "is a folder holding"
+        if hit is not None:
+            what, src = hit
+            raise OverwriteError(f"{flag} {how} {what} ({src}), which this command reads; "
+                                 "writing it would destroy the input", file=str(out),
+                                 fix=f"give {flag} another path, e.g. {alt}")
+        other = next((seen_out[k] for k in keys if k in seen_out), None)
+        if other is not None:
+            raise OverwriteError(f"{other} and {flag} name the same file; the second would "
+                                 "overwrite the first", file=str(out),
+                                 fix=f"give {flag} another path, e.g. {alt}")
+        for key in keys:
+            seen_out.setdefault(key, flag)
 
 
 def say(msg: str) -> None:

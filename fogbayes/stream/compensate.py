@@ -34,7 +34,7 @@ from .covariates import covariate_chunks, make_plan
 from .pauta import stream_pauta
 from .scan import scan_time
 from .sources import DEFAULT_ROWS, RecordSource, open_source
-from .writers import open_sink
+from .writers import check_sink, open_sink
 
 
 class StreamCompensation(NamedTuple):
@@ -88,6 +88,7 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
             time column is neither read nor validated (nothing else needs it).
         dtype: dtype of the compensated column (float64 = the in-memory result).
     """
+    check_sink(out)  # an output it could not write or replace: refused before any pass
     if not isinstance(source, RecordSource):
         source = open_source(source)
     model = fit.get("model") if isinstance(fit, dict) else None
@@ -139,17 +140,17 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
         passes += pauta.passes
     cols = {"time": np.float64} if include_time else {}
     cols.update(output=dtype, outlier=np.bool_)
-    sink = open_sink(out, source.n, cols)
     n_out = 0
-    for ch, comp in compensated():
-        mask = pauta.flags(comp) if pauta is not None else np.zeros(comp.size, bool)
-        n_out += int(mask.sum())
-        y = convert_rate(comp, "deg/h", source.unit, scale_factor=source.scale_factor)
-        part = {"output": np.asarray(y, dtype=float), "outlier": mask}
-        if include_time:
-            part["time"] = ch.time
-        sink.write(**part)
-    path = sink.close()
+    with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
+        for ch, comp in compensated():
+            mask = pauta.flags(comp) if pauta is not None else np.zeros(comp.size, bool)
+            n_out += int(mask.sum())
+            y = convert_rate(comp, "deg/h", source.unit, scale_factor=source.scale_factor)
+            part = {"output": np.asarray(y, dtype=float), "outlier": mask}
+            if include_time:
+                part["time"] = ch.time
+            sink.write(**part)
+        path = sink.close()
     return StreamCompensation(path, source.n, tuple(cols), n_out,
                               float(pauta.threshold) if pauta else float("nan"),
                               int(pauta.iterations) if pauta else 0, passes + 1)
@@ -170,31 +171,31 @@ def _composite(source, fit, out, rows, include_time, dtype):
     fields = ("time", "output", "temperatures") + (("input_rate",) if by_cell else ())
     cols = {"time": np.float64} if include_time else {}
     cols.update(rate=dtype, outlier=np.bool_)
-    sink = open_sink(out, source.n, cols)
     origin_t = prev_w = None
     n_out = 0
-    for ch in source.chunks(rows, fields=fields):
-        t = ch.time
-        if by_cell:  # fogbayes.composite_cells.operating_time, carried across chunks
-            w = ch.input_rate
-            step = np.abs(np.diff(w, prepend=w[0] if prev_w is None else prev_w)) > 0.01
-            if prev_w is None:
-                step[0] = True  # the record's first row is an origin
-            idx = np.maximum.accumulate(np.where(step, np.arange(t.size), -1))
-            origin = np.where(idx >= 0, t[np.maximum(idx, 0)], origin_t if origin_t is not None
-                              else t[0])
-            origin_t, prev_w = float(origin[-1]), float(w[-1])
-        else:
-            origin_t = float(t[0]) if origin_t is None else origin_t
-            origin = origin_t
-        op = t - origin
-        U, T = ch.output, ch.temperatures[:, 0]
-        rate, ok = _pieces(lambda a, b, c: tuple(comp(a, b, c)), rows, U, T, op)
-        mask = ~np.asarray(ok)
-        n_out += int(mask.sum())
-        part = {"rate": np.asarray(rate, dtype=float), "outlier": mask}
-        if include_time:
-            part["time"] = t
-        sink.write(**part)
-    path = sink.close()
+    with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
+        for ch in source.chunks(rows, fields=fields):
+            t = ch.time
+            if by_cell:  # fogbayes.composite_cells.operating_time, carried across chunks
+                w = ch.input_rate
+                step = np.abs(np.diff(w, prepend=w[0] if prev_w is None else prev_w)) > 0.01
+                if prev_w is None:
+                    step[0] = True  # the record's first row is an origin
+                idx = np.maximum.accumulate(np.where(step, np.arange(t.size), -1))
+                origin = np.where(idx >= 0, t[np.maximum(idx, 0)],
+                                  origin_t if origin_t is not None else t[0])
+                origin_t, prev_w = float(origin[-1]), float(w[-1])
+            else:
+                origin_t = float(t[0]) if origin_t is None else origin_t
+                origin = origin_t
+            op = t - origin
+            U, T = ch.output, ch.temperatures[:, 0]
+            rate, ok = _pieces(lambda a, b, c: tuple(comp(a, b, c)), rows, U, T, op)
+            mask = ~np.asarray(ok)
+            n_out += int(mask.sum())
+            part = {"rate": np.asarray(rate, dtype=float), "outlier": mask}
+            if include_time:
+                part["time"] = t
+            sink.write(**part)
+        path = sink.close()
     return StreamCompensation(path, source.n, tuple(cols), n_out, float("nan"), 0, 1)

@@ -13,6 +13,15 @@
 * ``.parquet``: one row group per chunk through ``pyarrow.parquet.ParquetWriter``.
 
 Memory: one chunk of each column.
+
+Never half-written (:mod:`fogbayes.data.atomic`): everything is written under a hidden
+temporary name beside the target (``.<stem>.tmp-<pid>-<random>...``: the folder, the
+``.npz`` with its ``.parts`` folder, the ``.parquet``) and renamed into place by
+:meth:`Sink.close` once complete and flushed to disk; :meth:`Sink.abort` (also run when a
+``with`` block of the sink raises, Ctrl-C and SIGTERM included) removes it, leaving the
+target as it was. A folder target that exists is replaced as a whole, and only if it holds
+nothing but ``.npy`` files (an earlier output); a folder with anything else is refused
+before work starts (:func:`check_sink`).
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..data.atomic import _fsync, _fsync_dir, _remove, atomic_dir, check_replaceable_dir, temp_path
 from ..errors import FileFormatError
 
 
@@ -57,20 +67,39 @@ class Sink:
 
     def __init__(self, path, n: int, columns: dict, kind: str):
         self.path, self.n, self.columns, self.kind = Path(path), int(n), dict(columns), kind
-        if kind == "parquet":
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            schema = pa.schema([(nm, pa.from_numpy_dtype(np.dtype(dt)))
-                                for nm, dt in self.columns.items()])
-            self._pq = pq.ParquetWriter(self.path, schema)
-            self._schema = schema
+        self._done = False
+        self._w = {}
+        if kind == "dir":  # a temporary folder beside the target, renamed in by close()
+            self._atomic = atomic_dir(self.path)
+            self._dir = self._atomic.__enter__()
         else:
-            self._dir = self.path if kind == "dir" else Path(str(self.path) + ".parts")
-            self._dir.mkdir(parents=True, exist_ok=True)
-            self._w = {nm: NpyWriter(self._dir / f"{nm}.npy", n, dt)
-                       for nm, dt in self.columns.items()}
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._tmp = temp_path(self.path)
+        try:
+            if kind == "parquet":
+                import pyarrow as pa
+                import pyarrow.parquet as pq
+
+                schema = pa.schema([(nm, pa.from_numpy_dtype(np.dtype(dt)))
+                                    for nm, dt in self.columns.items()])
+                self._pq = pq.ParquetWriter(self._tmp, schema)
+                self._schema = schema
+            else:
+                if kind == "npz":
+                    self._dir = temp_path(Path(str(self.path) + ".parts"))
+                    self._dir.mkdir()
+                for nm, dt in self.columns.items():
+                    self._w[nm] = NpyWriter(self._dir / f"{nm}.npy", n, dt)
+        except BaseException:
+            self.abort()
+            raise
+
+    def __enter__(self) -> Sink:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is not None:
+            self.abort()
 
     def write(self, **cols: np.ndarray) -> None:
         if self.kind == "parquet":
@@ -84,31 +113,85 @@ class Sink:
                 w.write(cols[nm])
 
     def close(self) -> Path:
-        if self.kind == "parquet":
-            self._pq.close()
-            return self.path
-        for w in self._w.values():
-            w.close()
-        if self.kind == "npz":
-            with zipfile.ZipFile(self.path, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
-                for nm, w in self._w.items():
-                    with open(w.path, "rb") as src, zf.open(f"{nm}.npy", "w",
-                                                            force_zip64=True) as dst:
-                        shutil.copyfileobj(src, dst, 1 << 22)
-                    os.remove(w.path)
-            self._dir.rmdir()
+        """Finish the output and rename it into place; on failure, :meth:`abort`."""
+        try:
+            if self.kind == "parquet":
+                self._pq.close()
+            else:
+                for w in self._w.values():
+                    w.close()
+            if self.kind == "dir":
+                self._done = True
+                self._atomic.__exit__(None, None, None)  # fsync, rename into place
+                return self.path
+            if self.kind == "npz":
+                with zipfile.ZipFile(self._tmp, "w", zipfile.ZIP_STORED,
+                                     allowZip64=True) as zf:
+                    for nm, w in self._w.items():
+                        with open(w.path, "rb") as src, zf.open(f"{nm}.npy", "w",
+                                                                force_zip64=True) as dst:
+                            shutil.copyfileobj(src, dst, 1 << 22)
+                        os.remove(w.path)
+                self._dir.rmdir()
+            _fsync(self._tmp)
+            os.replace(self._tmp, self.path)
+            self._done = True
+        except BaseException:
+            self.abort()
+            raise
+        _fsync_dir(self.path.parent)
         return self.path
 
+    def abort(self) -> None:
+        """Remove everything written so far; the target is left as it was."""
+        if self._done:
+            return
+        self._done = True
+        for w in self._w.values():
+            try:
+                w._fh.close()
+            except Exception:  # noqa: BLE001  (cleanup goes on)
+                pass
+        if self.kind == "parquet" and hasattr(self, "_pq"):
+            try:
+                self._pq.close()
+            except Exception:  # noqa: BLE001
+                pass
+        if self.kind == "dir":
+            self._atomic.__exit__(FileFormatError, FileFormatError("aborted"), None)
+            return
+        if self.kind == "npz" and hasattr(self, "_dir"):
+            _remove(self._dir)
+        _remove(self._tmp)
 
-def open_sink(path, n: int, columns: dict) -> Sink:
-    """A :class:`Sink` for ``columns`` (name -> dtype) of ``n`` rows at ``path``."""
+
+def _kind(path) -> str:
     p = str(path)
     suffix = Path(p).suffix.lower()
     if p.endswith(("/", os.sep)) or suffix == "":
-        return Sink(path, n, columns, "dir")
+        return "dir"
     if suffix in (".parquet", ".pq"):
-        return Sink(path, n, columns, "parquet")
+        return "parquet"
     if suffix == ".npz":
-        return Sink(path, n, columns, "npz")
+        return "npz"
     raise FileFormatError(f"cannot stream into a '{suffix}' file", file=p,
                           fix="write a directory of .npy files, .npz or .parquet")
+
+
+def check_sink(path) -> None:
+    """Refuse, before any work, an output :func:`open_sink` could not write or replace."""
+    if _kind(path) == "dir":
+        check_replaceable_dir(path)
+    elif Path(path).is_dir():
+        raise FileFormatError("is a folder, not a file", file=str(path),
+                              fix="name a file, or remove the folder")
+
+
+def open_sink(path, n: int, columns: dict) -> Sink:
+    """A :class:`Sink` for ``columns`` (name -> dtype) of ``n`` rows at ``path``.
+
+    Use it as ``with open_sink(...) as sink: ...; sink.close()`` so that an exception
+    removes the partial output.
+    """
+    check_sink(path)
+    return Sink(path, n, columns, _kind(path))

@@ -1,0 +1,193 @@
+"""Write outputs so that a reader finds the old file or the new one, never half of one.
+
+Every file fogbayes writes goes through :func:`atomic_path` (or :func:`write_text`): the
+bytes go to a temporary file *in the same folder* (``.<stem>.tmp-<pid>-<random><suffix>``,
+hidden, with the final suffix so that writers which pick the format from the name --
+matplotlib, NumPy -- still do), which is flushed to disk (``fsync``) and only then renamed
+over the final name with :func:`os.replace` -- one atomic step on POSIX and Windows, as the
+rename stays inside one file system. If anything goes wrong before the rename (an
+exception, Ctrl-C, or SIGTERM, which the command line turns into an exception), the
+temporary file is removed and the final name is left as it was: the old file, or none.
+Only SIGKILL or a power cut can leave a ``.*.tmp-*`` file behind, never a truncated file
+under the final name.
+
+Folders (the ``--stream`` output of one ``<column>.npy`` per column) go through
+:func:`atomic_dir`: written as a whole in a temporary folder beside the target, then
+renamed into place. An existing target folder is replaced only when it holds nothing but
+``.npy`` files (an earlier output); any other content is refused before work starts
+(:func:`check_replaceable_dir`), never merged or deleted.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from ..errors import FileFormatError
+
+#: Marks the temporary files and folders of an unfinished write (``.<stem>.tmp-...``).
+TMP_MARK = ".tmp-"
+
+
+def temp_path(path: str | Path) -> Path:
+    """A fresh hidden temporary name beside ``path``, keeping its suffix."""
+    path = Path(path)
+    return path.with_name(f".{path.stem}{TMP_MARK}{os.getpid()}-{secrets.token_hex(4)}"
+                          f"{path.suffix}")
+
+
+def is_temp_name(name: str) -> bool:
+    """Whether ``name`` is a temporary file or folder of :func:`atomic_path`/:func:`atomic_dir`."""
+    return name.startswith(".") and TMP_MARK in name
+
+
+def _fsync(path: Path) -> None:
+    """Flush ``path``'s data to disk before it is renamed into place."""
+    fd = os.open(path, os.O_RDWR)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _fsync_dir(folder: Path) -> None:
+    """Make the rename itself durable (POSIX; a no-op where folders cannot be opened)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _remove(path: Path) -> None:
+    try:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink()
+    except FileNotFoundError:
+        pass
+    except OSError:
+        pass  # best effort: the final name is untouched either way
+
+
+@contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary path to write ``path``'s content to; rename it into place on success.
+
+    The parent folder is created. On any exception (``KeyboardInterrupt`` and ``SystemExit``
+    included) the temporary file is removed and ``path`` is left as it was. An existing
+    ``path`` that is not a regular file (``/dev/null``, a named pipe) is written directly.
+
+    Example:
+        >>> with atomic_path("out.png") as tmp:          # doctest: +SKIP
+        ...     fig.savefig(tmp)
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise FileFormatError("is a folder, not a file", file=str(path),
+                              fix="name a file inside it, or another path")
+    if path.exists() and not path.is_file():
+        yield path  # a device or a pipe: nothing to replace, nothing to protect
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = temp_path(path)
+    try:
+        yield tmp
+        if not tmp.is_file():
+            raise FileFormatError("the writer left no file", file=str(path))
+        _fsync(tmp)
+        if path.is_file():  # keep the permissions of the file replaced
+            shutil.copymode(path, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        _remove(tmp)
+        raise
+    _fsync_dir(path.parent)
+
+
+@contextmanager
+def atomic_open(path: str | Path, mode: str = "w", **kwargs):
+    """``open(path, mode)`` on a temporary file that replaces ``path`` when closed cleanly."""
+    with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
+        yield fh
+
+
+def write_text(path: str | Path, text: str, encoding: str = "utf-8") -> Path:
+    """Write ``text`` to ``path`` atomically; returns ``path``."""
+    path = Path(path)
+    with atomic_open(path, "w", encoding=encoding, newline="\n") as fh:
+        fh.write(text)
+    return path
+
+
+def check_replaceable_dir(path: str | Path) -> None:
+    """Refuse a folder output whose target exists and holds more than ``.npy`` files.
+
+    Such a folder is not an earlier output of fogbayes; replacing it would delete the other
+    files, and writing into it would mix two runs' columns. Raised before any work.
+    """
+    path = Path(path)
+    if not path.exists():
+        return
+    if not path.is_dir():
+        raise FileFormatError("exists and is a file, not a folder", file=str(path),
+                              fix="remove it, or name a folder (or a .npz/.parquet file)")
+    other = sorted(p.name for p in path.iterdir()
+                   if not (p.is_file() and p.suffix == ".npy"))
+    if other:
+        shown = ", ".join(other[:3]) + (", ..." if len(other) > 3 else "")
+        raise FileFormatError(f"the output folder holds other files ({shown}); it is replaced "
+                              "as a whole", file=str(path),
+                              fix="name a new or empty folder, or one holding only an earlier "
+                                  "output's .npy files")
+
+
+@contextmanager
+def atomic_dir(path: str | Path) -> Iterator[Path]:
+    """Yield a temporary folder to fill; it replaces the folder ``path`` on success.
+
+    ``path`` must not exist, or be a folder :func:`check_replaceable_dir` accepts. The old
+    folder is renamed aside, the new one renamed into place, and the old one deleted: at
+    every moment the final name holds the complete old folder, the complete new one, or
+    nothing (for the instant between the two renames; an exception there puts the old one
+    back). On any exception the temporary folder is removed.
+    """
+    path = Path(path)
+    check_replaceable_dir(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = temp_path(path)
+    tmp.mkdir()
+    old = None
+    try:
+        yield tmp
+        for f in tmp.iterdir():
+            if f.is_file():
+                _fsync(f)
+        _fsync_dir(tmp)
+        check_replaceable_dir(path)  # still ours to replace?
+        if path.exists():
+            old = temp_path(path.with_name(path.name + ".old"))
+            os.replace(path, old)
+        try:
+            os.replace(tmp, path)
+        except BaseException:
+            if old is not None and not path.exists():
+                os.replace(old, path)
+                old = None
+            raise
+    except BaseException:
+        _remove(tmp)
+        raise
+    _fsync_dir(path.parent)
+    if old is not None:
+        _remove(old)
