@@ -17,7 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from .noise_id_sums import lag1_from_sums, lag1_sums
+
 MIN_POINTS = 30
+#: From this many cluster means on, the lag-1 sums come from one compiled pass
+#: (:mod:`~fogbayes.stats.noise_id_sums`); below it the NumPy form is as fast.
+FUSED_MIN = 4096
 
 
 def lag1_acf(z: np.ndarray) -> float:
@@ -39,10 +44,19 @@ def _block_means(z: np.ndarray, m_prev: int, m: int) -> np.ndarray:
     """Means of clusters of ``m`` samples from the means ``z`` of clusters of ``m_prev``."""
     f = m // m_prev
     n_cl = z.size // f
+    if f == 2:  # octave grids: two strided reads, 3-4x faster than a reshape mean
+        return 0.5 * (z[0:2 * n_cl:2] + z[1:2 * n_cl:2])
     return z[:n_cl] if f == 1 else z[:n_cl * f].reshape(n_cl, f).mean(axis=1)
 
 
 def _alpha_of_means(z: np.ndarray, dmax: int) -> int | None:
+    if z.size >= FUSED_MIN:  # one compiled pass for every d (noise_id_sums)
+        sums = lag1_sums(z)
+        if sums[0] < MIN_POINTS:
+            return None
+        r1 = [lag1_from_sums(sums, d) for d in range(dmax + 1)]
+        if r1[0] is not None:  # else: a ramp-dominated series, the two-pass form below
+            return _alpha_of_r1(r1, dmax)
     z = z[np.isfinite(z)]
     if z.size < MIN_POINTS:
         return None
@@ -56,6 +70,15 @@ def _alpha_of_means(z: np.ndarray, dmax: int) -> int | None:
             return int(-np.round(2 * delta) - 2 * d)
         z = np.diff(z)
         d += 1
+
+
+def _alpha_of_r1(r1: list[float], dmax: int) -> int:
+    """The same stopping rule as :func:`_alpha_of_means`, from the r1 of every order d."""
+    for d in range(dmax + 1):
+        delta = r1[d] / (1.0 + r1[d])
+        if delta < 0.25 or d >= dmax:
+            return int(-np.round(2 * delta) - 2 * d)
+    raise AssertionError("unreachable: d reaches dmax")
 
 
 def identify_alphas(y: np.ndarray, ms, *, kind: str = "oadev") -> np.ndarray:
