@@ -8,6 +8,8 @@ line prints it as one line on stderr and exits with code 2.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 
 class FogbayesError(ValueError):
     """Base class of fogbayes input errors.
@@ -17,6 +19,8 @@ class FogbayesError(ValueError):
         column: the column concerned, if any.
         row: 0-based data row (the first row after the header is row 0), if any.
         fix: one sentence saying how to fix it.
+        line: the 1-based physical line of the file (CSV: counting the ``# key: value``
+            lines, the header and blank lines), where known.
     """
 
     def __init__(
@@ -27,12 +31,14 @@ class FogbayesError(ValueError):
         column: str | None = None,
         row: int | None = None,
         fix: str | None = None,
+        line: int | None = None,
     ):
         self.problem = problem
         self.file = file
         self.column = column
         self.row = row
         self.fix = fix
+        self.line = line
         super().__init__(self._compose())
 
     def _compose(self) -> str:
@@ -42,10 +48,23 @@ class FogbayesError(ValueError):
         if self.column is not None:
             where.append(f"column '{self.column}'")
         if self.row is not None:
-            # Data row r sits on line r + 2 of a CSV file with one header line.
-            where.append(f"row {self.row} (line {self.row + 2})")
+            # the physical line (1-based, every line counted: metadata, header, blank lines)
+            # is known only where the row was read from a text file; see ``located``
+            where.append(f"row {self.row}" + (f" (line {self.line})" if self.line else ""))
+        elif self.line is not None:
+            where.append(f"line {self.line}")
         head = ": ".join([", ".join(where), self.problem]) if where else self.problem
-        return f"{head}. Fix: {self.fix}" if self.fix else head
+        text = f"{head}. Fix: {self.fix}" if self.fix else head
+        return " ".join(text.splitlines())  # one line on stderr, whatever the parts hold
+
+    def located(self, *, file: str | None = None, line: int | None = None) -> "FogbayesError":
+        """Fill in the file and/or the physical line where they were not known; returns self."""
+        if file is not None and self.file is None:
+            self.file = str(file)
+        if line is not None and self.line is None:
+            self.line = int(line)
+        self.args = (self._compose(),)
+        return self
 
 
 class FileFormatError(FogbayesError):
@@ -86,3 +105,45 @@ class ShapeError(FogbayesError):
 
 class ArgumentError(FogbayesError):
     """An argument value is invalid (a window, an order, a method or scenario name)."""
+
+
+class MissingExtraError(FogbayesError):
+    """An optional package is not installed (Parquet: pyarrow; ``--engine dask``:
+    distributed); the fix names the extra that installs it (:mod:`fogbayes._optional`)."""
+
+
+class DuplicateColumnError(FileFormatError):
+    """Two columns of a file have the same name (one would silently hide the other)."""
+
+
+class RaggedRowError(FileFormatError):
+    """A CSV row has more or fewer fields than the header (its cells would shift)."""
+
+
+class MetadataError(FileFormatError):
+    """A metadata value (``# key: value`` line, Parquet/NPZ metadata) is invalid."""
+
+
+class ImplausibleValueError(FogbayesError):
+    """Values that are numbers but physically implausible (wrong unit or scale)."""
+
+
+#: The errors about a recording's data: :func:`about_file` names the file in them.
+DATA_ERRORS = (EmptyRecordingError, MissingColumnError, NonNumericError, NonFiniteError,
+               TimeOrderError, TooShortError, UnitError, ShapeError, ImplausibleValueError)
+
+
+@contextmanager
+def about_file(file):
+    """Name ``file`` in the data errors raised inside that name no file.
+
+    Array-level code (Allan deviation, block grids, least squares) raises
+    :class:`TooShortError` or :class:`UnitError` without knowing where the data came
+    from; a caller that does wraps the work: ``with about_file(rec.meta.source): ...``.
+    """
+    try:
+        yield
+    except DATA_ERRORS as exc:
+        if file is not None and exc.file is None:
+            exc.located(file=str(file))
+        raise

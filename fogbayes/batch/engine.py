@@ -15,7 +15,9 @@ Dask's wheels are pure Python (Ray's wheel is about ten times larger, with a C++
 its own object store daemon); ``LocalCluster`` starts in-process in a few seconds, with no
 daemon to install or leave behind; the same ``Client`` code is pointed at a remote
 scheduler by its address; and each future carries its own exception, so a failure stays
-with its recording. Nothing of fogbayes depends on Dask outside this module.
+with its recording. Nothing of fogbayes depends on Dask outside this module, and Dask is an
+extra (``pip install 'fogbayes[dask]'``): without it, ``engine="dask"`` stops before any work
+with one line naming the extra (:func:`check_engine`, :mod:`fogbayes._optional`).
 
 Every worker imports :mod:`fogbayes` before it runs anything (a worker plugin), which turns
 on JAX float64 there too: the numbers a worker computes are those this process computes
@@ -31,6 +33,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
+from .._optional import DASK, require
 from .files import FleetError
 
 ENGINES = ("local", "dask")
@@ -46,12 +49,14 @@ def check_engine(engine: str, address: str | None, workers: int) -> None:
     if int(workers) < 1:
         raise FleetError(f"--workers {workers} is below 1", column="--workers",
                          fix="use e.g. --workers 2")
+    if engine == "dask":  # before any work starts: one line naming the extra if it is missing
+        require("distributed", *DASK)
 
 
 def _worker_plugin():
-    from distributed import WorkerPlugin
+    distributed = require("distributed", *DASK)
 
-    class ImportFogbayes(WorkerPlugin):
+    class ImportFogbayes(distributed.WorkerPlugin):
         """Import fogbayes (float64 on) in the worker before any task runs."""
 
         name = "fogbayes-float64"
@@ -70,7 +75,8 @@ def _worker_plugin():
 @contextmanager
 def dask_client(address: str | None = None, workers: int = 2) -> Iterator[Any]:
     """A Dask client: on a local cluster we start (and close), or on ``address``."""
-    from distributed import Client, LocalCluster
+    distributed = require("distributed", *DASK)
+    Client, LocalCluster = distributed.Client, distributed.LocalCluster
 
     cluster = None
     try:
@@ -132,7 +138,7 @@ def run_tasks(fn: Callable[[Any], Any], items: Sequence[Any], *, engine: str = "
             on_done(r)
         return {"results": results, "workers": 1}
 
-    from distributed import as_completed
+    as_completed = require("distributed", *DASK).as_completed
 
     with dask_client(address, workers) as client:
         if on_start is not None:

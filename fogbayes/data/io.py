@@ -21,11 +21,21 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import EmptyRecordingError, FileFormatError, FogbayesError, MissingColumnError, NonNumericError
+from ._read import Table, check_plausible, finite, meta_float, meta_text, meta_unit, time_divisor
+from ._read import read_csv as _read_csv
+from ._read import read_npz as _read_npz
+from ._read import read_parquet as _read_parquet
+from .atomic import atomic_path
 from .recording import Metadata, Recording
 
 FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".npz": "npz"}
 _TEMP_RE = re.compile(r"^temperature(_\d+)?$")
 _META_KEYS = ("unit", "sensor_id", "sample_rate", "scale_factor")
+
+
+#: The command-line flag that names each column role (fogbayes/cli/_common.py).
+_COLUMN_FLAGS = {"time": "--time-column", "output": "--column", "temperature": "--temperature",
+                 "input-rate": "--input-rate-column"}
 
 
 def load(
@@ -38,11 +48,14 @@ def load(
     unit: str | None = None,
     scale_factor: float | None = None,
     sensor_id: str | None = None,
+    time_unit: str = "s",
+    temperature_scale: float = 1.0,
+    temperature_offset: float = 0.0,
 ) -> Recording:
     """Read a Recording from ``path`` (format from the extension).
 
     Args:
-        time, output: column names of the time (s) and gyro output columns.
+        time, output: column names of the time and gyro output columns.
         temperature: a column name or list of names; default: every column named
             ``temperature`` or ``temperature_<k>``, in that order (none is fine).
         input_rate: column of the reference rate (deg/s); used only if present, unless
@@ -50,12 +63,26 @@ def load(
         unit: output unit; overrides the file's metadata (default ``deg/h``).
         scale_factor: raw units per deg/s, for V/mV/Hz outputs.
         sensor_id: overrides the file's metadata.
+        time_unit: unit of the time column: ``s``, ``ms``, ``us`` or ``ns`` (scaled to s).
+        temperature_scale, temperature_offset: temperatures in deg C are
+            ``temperature_scale * value + temperature_offset`` (raw sensor words, kelvin).
+
+    The file is checked, not trusted (:mod:`fogbayes.data._read`): duplicate column
+    names, ragged CSV rows, invalid metadata, damaged NPZ/Parquet files, a sample rate
+    outside 1e-4 Hz ... 1 MHz and temperatures outside -100 ... 200 deg C are errors.
+    Errors about a CSV row name its physical line (metadata, header and blank lines
+    counted).
 
     Raises:
         FogbayesError: a subclass naming the file, column and row, and how to fix it.
     """
     path = Path(path)
     src = str(path)
+    divisor = time_divisor(time_unit)
+    t_scale = finite(temperature_scale, "temperature_scale", nonzero=True)
+    t_offset = finite(temperature_offset, "temperature_offset")
+    if scale_factor is not None:
+        scale_factor = finite(scale_factor, "scale_factor", positive=True)
     kind = FORMATS.get(path.suffix.lower())
     if kind is None:
         raise FileFormatError(f"unknown file type '{path.suffix}'", file=src,
@@ -63,7 +90,25 @@ def load(
     if not path.is_file():
         raise FileFormatError("file not found", file=src, fix="check the path")
     reader = {"csv": _read_csv, "parquet": _read_parquet, "npz": _read_npz}[kind]
-    columns, meta = reader(path)
+    table = reader(path)
+    try:
+        return _recording(path, table, time=time, output=output, temperature=temperature,
+                          input_rate=input_rate, unit=unit, scale_factor=scale_factor,
+                          sensor_id=sensor_id, divisor=divisor, t_scale=t_scale,
+                          t_offset=t_offset)
+    except FogbayesError as exc:  # a data row of a CSV file: name its physical line
+        lines = table.row_lines
+        if exc.row is not None and lines is not None and exc.file == src \
+                and 0 <= exc.row < len(lines):
+            exc.located(line=int(lines[exc.row]))
+        raise
+
+
+def _recording(path: Path, table: Table, *, time, output, temperature, input_rate, unit,
+               scale_factor, sensor_id, divisor, t_scale, t_offset) -> Recording:
+    """The checked Recording from what a reader found in ``path``."""
+    src = str(path)
+    columns, meta = table.columns, table.meta
     if not columns or all(len(v) == 0 for v in columns.values()):
         raise EmptyRecordingError("the file holds no data rows", file=src,
                                   fix="check the file was written completely")
@@ -74,36 +119,48 @@ def load(
             hint = f"did you mean '{close[0]}'? " if close else ""
             raise MissingColumnError(
                 f"no column '{name}' ({role}); the file has {list(columns)}", file=src,
-                column=name, fix=f"{hint}rename the column or pass its name (e.g. --{role}-column)")
+                column=name, fix=f"{hint}rename the column or pass its name "
+                                 f"({_COLUMN_FLAGS[role]} NAME on the command line, {role.replace('-', '_')}= "
+                                 "in fogbayes.load)")
         return _as_float(columns[name], src, name)
 
     t = need(time, "time")
+    if divisor != 1.0:
+        t = t / divisor
     y = need(output, "output")
     if temperature is None:
         tnames = sorted((c for c in columns if _TEMP_RE.match(c)), key=_temp_order)
     else:
         tnames = [temperature] if isinstance(temperature, str) else list(temperature)
     temps = np.column_stack([need(c, "temperature") for c in tnames]) if tnames else None
+    if temps is not None and (t_scale != 1.0 or t_offset != 0.0):
+        temps = temps * t_scale + t_offset
     rate = None
     if input_rate and (input_rate in columns or input_rate != "input_rate"):
         rate = need(input_rate, "input-rate")
-    sr = meta.get("sample_rate")
     md = Metadata(
-        sensor_id=sensor_id or str(meta.get("sensor_id", path.stem)),
-        sample_rate=float(sr) if sr not in (None, "", "None") else None,
+        sensor_id=sensor_id or meta_text(table, "sensor_id", src) or path.stem,
+        sample_rate=meta_float(table, "sample_rate", src, what="in Hz"),
         source=src,
         extra={k: v for k, v in meta.items() if k not in _META_KEYS},
     )
-    sf = scale_factor if scale_factor is not None else meta.get("scale_factor")
-    return Recording(
-        time=t, output=y, unit=unit or str(meta.get("unit", "deg/h")),
+    sf = scale_factor if scale_factor is not None else \
+        meta_float(table, "scale_factor", src, what="raw units per deg/s")
+    rec = Recording(
+        time=t, output=y, unit=unit or meta_unit(table, src),
         temperatures=temps, temperature_names=tuple(tnames), input_rate=rate,
-        scale_factor=float(sf) if sf not in (None, "", "None") else None, meta=md,
+        scale_factor=sf, meta=md,
     )
+    check_plausible(rec, src=src, time_column=time, table=table)
+    return rec
 
 
 def save(rec: Recording, path: str | Path) -> Path:
-    """Write ``rec`` to ``path`` (format from the extension); :func:`load` reads it back."""
+    """Write ``rec`` to ``path`` (format from the extension); :func:`load` reads it back.
+
+    Atomic (:mod:`fogbayes.data.atomic`): a temporary file beside ``path`` is renamed over
+    it once complete, so ``path`` holds the old file or the new one, never a part.
+    """
     path = Path(path)
     kind = FORMATS.get(path.suffix.lower())
     if kind is None:
@@ -117,49 +174,20 @@ def save(rec: Recording, path: str | Path) -> Path:
     meta = {"unit": rec.unit, "sensor_id": rec.meta.sensor_id,
             "sample_rate": rec.meta.sample_rate, "scale_factor": rec.scale_factor,
             **{k: v for k, v in rec.meta.extra.items() if _jsonable(v)}}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    {"csv": _write_csv, "parquet": _write_parquet, "npz": _write_npz}[kind](path, cols, meta)
+    with atomic_path(path) as tmp:
+        {"csv": _write_csv, "parquet": _write_parquet, "npz": _write_npz}[kind](tmp, cols, meta)
     return path
 
 
 def write_table(path: str | Path, columns: dict[str, np.ndarray]) -> Path:
-    """Write plain columns (e.g. a compensated output) as CSV, exact to 17 digits."""
+    """Write plain columns (e.g. a compensated output) as CSV, exact to 17 digits (atomic)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    _write_csv(path, columns, {})
+    with atomic_path(path) as tmp:
+        _write_csv(tmp, columns, {})
     return path
 
 
-# -- CSV -------------------------------------------------------------------------------
-def _read_csv(path: Path):
-    import pandas as pd
-
-    meta, n_comment = {}, 0
-    try:
-        with open(path, encoding="utf-8") as fh:
-            for line in fh:
-                if not line.startswith("#"):
-                    break
-                n_comment += 1
-                key, sep, value = line[1:].partition(":")
-                if sep:
-                    meta[key.strip()] = value.strip()
-        df = pd.read_csv(path, skiprows=n_comment, skipinitialspace=True,
-                         encoding="utf-8", low_memory=False)
-    except FogbayesError:
-        raise
-    except pd.errors.EmptyDataError:
-        raise EmptyRecordingError("the file is empty", file=str(path),
-                                  fix="write a header line and data rows") from None
-    except (pd.errors.ParserError, UnicodeDecodeError, ValueError, OSError) as exc:
-        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise FileFormatError(f"cannot parse as CSV ({msg})", file=str(path),
-                              fix="use comma-separated columns with one header line and the "
-                                  "same number of fields on every row") from None
-    df.columns = [str(c).strip() for c in df.columns]
-    return {c: df[c].to_numpy() for c in df.columns}, meta
-
-
+# -- CSV (reading: fogbayes.data._read) -------------------------------------------------
 def _write_csv(path: Path, cols: dict, meta: dict) -> None:
     names = list(cols)
     data = np.column_stack([np.asarray(cols[c], dtype=float) for c in names])
@@ -170,32 +198,21 @@ def _write_csv(path: Path, cols: dict, meta: dict) -> None:
 
 
 def write_csv_mixed(path: str | Path, cols: dict[str, np.ndarray]) -> Path:
-    """CSV with float columns at 17 digits and boolean columns as true/false."""
+    """CSV with float columns at 17 digits and boolean columns as true/false (atomic)."""
     import pandas as pd
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    pd.DataFrame(cols).to_csv(path, index=False, float_format="%.17g")
+    with atomic_path(path) as tmp:
+        pd.DataFrame(cols).to_csv(tmp, index=False, float_format="%.17g")
     return path
 
 
 # -- Parquet ---------------------------------------------------------------------------
-def _read_parquet(path: Path):
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    try:
-        table = pq.read_table(path)
-    except (pa.ArrowException, OSError) as exc:
-        raise FileFormatError(f"cannot read as Parquet ({exc})", file=str(path),
-                              fix="check the file is a complete Parquet file") from None
-    raw = (table.schema.metadata or {}).get(b"fogbayes", b"{}")
-    return {c: table.column(c).to_numpy(zero_copy_only=False) for c in table.column_names}, json.loads(raw)
-
-
 def _write_parquet(path: Path, cols: dict, meta: dict) -> None:
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+    from .._optional import PARQUET, require
+
+    pa = require("pyarrow", *PARQUET)
+    pq = require("pyarrow.parquet", *PARQUET)
 
     table = pa.table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
     table = table.replace_schema_metadata({b"fogbayes": json.dumps(meta).encode()})
@@ -203,24 +220,11 @@ def _write_parquet(path: Path, cols: dict, meta: dict) -> None:
 
 
 # -- NPZ -------------------------------------------------------------------------------
-def _read_npz(path: Path):
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            cols = {k: z[k] for k in z.files if k != "__meta__"}
-            meta = json.loads(str(z["__meta__"])) if "__meta__" in z.files else {}
-    except (OSError, ValueError) as exc:
-        raise FileFormatError(f"cannot read as NPZ ({exc})", file=str(path),
-                              fix="write it with numpy.savez, one 1-D array per column") from None
-    for k, v in cols.items():
-        if v.ndim != 1:
-            raise FileFormatError(f"array '{k}' has shape {v.shape}, expected 1-D", file=str(path),
-                                  column=k, fix="store one 1-D array per column")
-    return cols, meta
-
-
 def _write_npz(path: Path, cols: dict, meta: dict) -> None:
-    np.savez(path, __meta__=np.array(json.dumps(meta)),
-             **{k: np.asarray(v, dtype=float) for k, v in cols.items()})
+    # a file object, not a name: numpy.savez would append ".npz" to a name like "x.NPZ"
+    with open(path, "wb") as fh:
+        np.savez(fh, __meta__=np.array(json.dumps(meta)),
+                 **{k: np.asarray(v, dtype=float) for k, v in cols.items()})
 
 
 # -- helpers ---------------------------------------------------------------------------
@@ -228,8 +232,10 @@ def _as_float(values: np.ndarray, src: str, name: str) -> np.ndarray:
     """Convert a column to float64, naming the first cell that is not a number."""
     if values.dtype.kind in "fiu":
         return values.astype(float)
-    if values.dtype.kind == "b":
-        return values.astype(float)
+    if values.dtype.kind == "b":  # true/false is a flag, never a measurement
+        raise NonNumericError(f"'{values[0]}' is not a number (the column holds true/false)",
+                              file=src, column=name, row=0,
+                              fix="give numbers in this column, or name the right column")
     out = np.empty(len(values), dtype=float)
     for i, v in enumerate(values):
         if v is None or (isinstance(v, float) and np.isnan(v)):

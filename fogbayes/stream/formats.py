@@ -72,7 +72,9 @@ class _ParquetStream:
     """Parquet columns, re-cut from row-group batches into chunks of any size."""
 
     def __init__(self, path: Path, names: Sequence[str]):
-        import pyarrow.parquet as pq
+        from .._optional import PARQUET, require
+
+        pq = require("pyarrow.parquet", *PARQUET)
 
         self.names = list(names)
         self.src = str(path)
@@ -183,8 +185,10 @@ def _scan_npy_dir(path: Path):
 
 
 def _scan_parquet(path: Path):
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+    from .._optional import PARQUET, require
+
+    pa = require("pyarrow", *PARQUET)
+    pq = require("pyarrow.parquet", *PARQUET)
 
     try:
         pf = pq.ParquetFile(path)

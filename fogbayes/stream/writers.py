@@ -77,8 +77,10 @@ class Sink:
             self._tmp = temp_path(self.path)
         try:
             if kind == "parquet":
-                import pyarrow as pa
-                import pyarrow.parquet as pq
+                from .._optional import PARQUET, require
+
+                pa = require("pyarrow", *PARQUET)
+                pq = require("pyarrow.parquet", *PARQUET)
 
                 schema = pa.schema([(nm, pa.from_numpy_dtype(np.dtype(dt)))
                                     for nm, dt in self.columns.items()])
@@ -103,8 +105,9 @@ class Sink:
 
     def write(self, **cols: np.ndarray) -> None:
         if self.kind == "parquet":
-            import pyarrow as pa
+            from .._optional import PARQUET, require
 
+            pa = require("pyarrow", *PARQUET)
             arrays = [pa.array(np.asarray(cols[nm], dtype=self.columns[nm]))
                       for nm in self.columns]
             self._pq.write_table(pa.Table.from_arrays(arrays, schema=self._schema))

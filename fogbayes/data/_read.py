@@ -1,0 +1,482 @@
+"""The readers behind :func:`fogbayes.data.load`: never silently wrong data.
+
+Each reader returns a :class:`Table` (columns, metadata, and for CSV the physical line of
+every data row and metadata key) or raises a :class:`~fogbayes.errors.FogbayesError`
+naming the file, the column and the row or line, and how to fix it.
+
+CSV: ``# key: value`` lines before the header carry metadata; blank lines are allowed
+anywhere and skipped; every physical line is counted, so the line an error names is the
+line an editor shows. Refused, where pandas alone would go on: two columns of one name
+(pandas renames the second ``name.1``), a row with more or fewer fields than the header
+(one extra field shifts every column, a missing one becomes NaN), a ``#`` line after the
+header, a metadata key given twice with different values, NUL bytes, non-UTF-8 text.
+
+NPZ: read member by member from the ZIP archive (CRC checked), headers checked against the
+bytes actually present before anything is allocated (a header claiming 1e15 rows is an
+error, not a 8 PB allocation), numbers only (no pickles, no object or string arrays), one
+1-D array per column, all of one length.
+
+Parquet: a damaged or foreign file, duplicate column names, and metadata that is not a
+JSON object are errors naming the file.
+
+After the Recording is built, :func:`check_plausible` refuses what is numerically valid but
+physically implausible: a sample rate outside 1e-4 Hz ... 1 MHz (times not in seconds), a
+temperature outside -100 ... 200 deg C (raw sensor words, kelvin), a metadata sample rate
+that disagrees with the time stamps.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import zipfile
+import zlib
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..errors import (ArgumentError, DuplicateColumnError, EmptyRecordingError, FileFormatError,
+                      FogbayesError, ImplausibleValueError, MetadataError, RaggedRowError,
+                      ShapeError, UnitError)
+
+#: Divisors that turn a time column into seconds (``--time-unit``, ``time_unit=``).
+TIME_UNITS = {"s": 1.0, "ms": 1e3, "us": 1e6, "µs": 1e6, "ns": 1e9}
+#: Plausible sample rates (Hz) and temperatures (deg C) of a gyro recording.
+RATE_RANGE = (1e-4, 1e6)
+TEMPERATURE_RANGE = (-100.0, 200.0)
+#: A metadata sample rate may differ from the median time step by at most this factor.
+RATE_TOLERANCE = 1.5
+
+_NONE = ("", "None", "none", "null")
+
+
+class Table(NamedTuple):
+    """What a reader found in a file."""
+
+    columns: dict[str, np.ndarray]
+    meta: dict[str, Any]
+    row_lines: np.ndarray | None = None  # CSV: 1-based physical line of each data row
+    meta_lines: dict[str, int] = {}  # CSV: 1-based line of each metadata key
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    line = text.splitlines()[0] if text else type(exc).__name__
+    return line if len(line) <= 200 else line[:197] + "..."
+
+
+# -- CSV -------------------------------------------------------------------------------
+def _split(line: str, quoted: bool) -> list[str]:
+    if not quoted:
+        return line.split(",")
+    return next(csv.reader([line], skipinitialspace=True), [""])
+
+
+def read_csv(path: Path) -> Table:
+    """Read a CSV recording; see the module doc for what is refused."""
+    import pandas as pd
+
+    src = str(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise FileFormatError(f"cannot read the file ({exc.strerror or _first_line(exc)})",
+                              file=src, fix="check the path and its permissions") from None
+    try:
+        raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(f"not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start})",
+                              file=src, line=_line_of(raw, exc.start),
+                              fix="save the file as UTF-8 CSV, or give a .parquet or .npz "
+                                  "file") from None
+    if raw.startswith(b"\xef\xbb\xbf"):  # a byte-order mark, as spreadsheet programs write
+        raw = raw[3:]
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        raise FileFormatError("the file holds NUL bytes: binary data, not CSV text", file=src,
+                              line=_line_of(raw, nul),
+                              fix="give a CSV text file (or name a binary file .npz/.parquet)")
+    if b"\r" in raw:  # \r\n and a lone \r end a line, as in pandas' C parser
+        raw = raw.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+
+    # metadata and comment lines, then the header (a few lines: read one by one)
+    meta: dict[str, str] = {}
+    meta_lines: dict[str, int] = {}
+    pos, n_line, header = 0, 0, None
+    while pos < len(raw):
+        end = raw.find(b"\n", pos)
+        end = len(raw) if end < 0 else end
+        line, pos, n_line = raw[pos:end].decode("utf-8"), end + 1, n_line + 1
+        s = line.strip()
+        if not s:
+            continue
+        if not s.startswith("#"):
+            header = line
+            break
+        key, sep, value = s[1:].partition(":")
+        key, value = key.strip(), value.strip()
+        if sep and key:
+            if key in meta and meta[key] != value:
+                raise MetadataError(
+                    f"'# {key}:' is given twice, as {meta[key]!r} on line {meta_lines[key]} "
+                    f"and as {value!r}", file=src, line=n_line, fix=f"keep one '# {key}:' line")
+            meta[key] = value
+            meta_lines.setdefault(key, n_line)
+    if header is None:
+        raise EmptyRecordingError("the file is empty" if not meta else
+                                  "the file holds '# key: value' lines but no header line",
+                                  file=src, fix="write a header line and data rows")
+    header_line = n_line
+    body = raw[pos:]
+    del raw
+    quoted = b'"' in body or '"' in header
+    names = [c.strip() for c in _split(header, quoted)]
+    first: dict[str, int] = {}
+    for k, name in enumerate(names):
+        if not name:
+            names[k] = name = f"Unnamed: {k}"  # as pandas names a column without a name
+        if name in first:
+            raise DuplicateColumnError(
+                f"two columns are named '{name}' (fields {first[name] + 1} and {k + 1} of the "
+                "header); pandas would silently rename the second one", file=src, column=name,
+                line=header_line, fix="give every column its own name")
+        first[name] = k
+
+    # data lines: every non-blank line after the header, each with one field per column
+    if quoted or b"#" in body:
+        offsets, counts, body = _scan_lines(body, quoted, src, header_line)
+    else:
+        offsets, counts, body = _scan_bytes(body)
+    if offsets.size == 0:
+        raise EmptyRecordingError("the file has a header line but no data rows", file=src,
+                                  fix="check the file was written completely")
+    row_lines = header_line + 1 + offsets
+    bad = np.flatnonzero(counts != len(names))
+    if bad.size:
+        r, n_bad = int(bad[0]), int(bad.size)
+        more = f"; {n_bad - 1} more row(s) differ" if n_bad > 1 else ""
+        how = "an extra" if counts[r] > len(names) else "a missing"
+        raise RaggedRowError(
+            f"cannot parse as CSV: {counts[r]} field(s) where the header has {len(names)} "
+            f"({how} field shifts the columns after it){more}", file=src, row=r,
+            line=int(row_lines[r]),
+            fix="give every row exactly one field per header column (commas separate "
+                "fields; write empty cells as ',,')")
+    try:
+        df = pd.read_csv(io.BytesIO(body), header=None, names=names, index_col=False,
+                         skipinitialspace=True, skip_blank_lines=False, low_memory=False,
+                         encoding="utf-8")
+    except (pd.errors.ParserError, ValueError, OverflowError) as exc:
+        raise FileFormatError(f"cannot parse as CSV ({_first_line(exc)})", file=src,
+                              fix="use comma-separated columns with one header line and the "
+                                  "same number of fields on every row") from None
+    if len(df) != offsets.size:  # quoting that spans lines: never guess which row is which
+        raise FileFormatError(f"cannot parse as CSV: {offsets.size} data lines gave {len(df)} "
+                              "rows", file=src,
+                              fix="write one row per line, without quoted line breaks")
+    return Table({c: df[c].to_numpy() for c in names}, meta, row_lines, meta_lines)
+
+
+def _line_of(raw: bytes, offset: int) -> int:
+    """1-based physical line of byte ``offset`` (\\n, \\r\\n and a lone \\r end lines)."""
+    head = raw[:offset]
+    return head.count(b"\n") + head.count(b"\r") - head.count(b"\r\n") + 1
+
+
+_BLANK = np.zeros(256, dtype=bool)
+_BLANK[[9, 10, 11, 12, 32]] = True  # tab, newline, vertical tab, form feed, space
+
+
+def _scan_bytes(body: bytes) -> tuple[np.ndarray, np.ndarray, bytes]:
+    """Data lines of an unquoted CSV body without comment lines, vectorised: the 0-based
+    offset of each non-blank line, its number of fields, and the body without blank lines."""
+    a = np.frombuffer(body, dtype=np.uint8)
+    starts = np.flatnonzero(a == 10) + 1
+    starts = np.concatenate(([0], starts[starts < a.size]))
+    if a.size == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), body
+    text = np.add.reduceat(~_BLANK[a], starts, dtype=np.int64) > 0
+    commas = np.add.reduceat(a == 44, starts, dtype=np.int64)
+    offsets = np.flatnonzero(text)
+    if offsets.size != starts.size:  # blank lines: drop them, so rows match data lines
+        ends = np.concatenate((starts[1:], [a.size]))
+        body = b"".join(body[starts[k]:ends[k]] for k in offsets)
+        if body and not body.endswith(b"\n"):
+            body += b"\n"
+    return offsets, commas[offsets] + 1, body
+
+
+def _scan_lines(body: bytes, quoted: bool, src: str, header_line: int):
+    """:func:`_scan_bytes` line by line, for quoted fields and '#' characters."""
+    offsets, counts, keep = [], [], []
+    for k, raw_line in enumerate(body.split(b"\n")):
+        line = raw_line.decode("utf-8")
+        if not line or line.isspace():
+            continue
+        if line.lstrip()[:1] == "#":
+            raise FileFormatError(
+                "a '#' line after the header: metadata and comments belong before it",
+                file=src, line=header_line + 1 + k,
+                fix="move '# key: value' lines above the header line and delete comment "
+                    "lines between data rows (two files joined into one?)")
+        offsets.append(k)
+        counts.append(len(_split(line, quoted)) if quoted else line.count(",") + 1)
+        keep.append(raw_line)
+    return (np.asarray(offsets, dtype=np.int64), np.asarray(counts, dtype=np.int64),
+            b"\n".join(keep) + b"\n")
+
+
+# -- Parquet ---------------------------------------------------------------------------
+def read_parquet(path: Path) -> Table:
+    """Read a Parquet recording; metadata from the schema key ``fogbayes`` (a JSON object)."""
+    from .._optional import PARQUET, require
+
+    pq = require("pyarrow.parquet", *PARQUET)
+
+    src = str(path)
+    fix = "check the file is a complete Parquet file (write it again)"
+    try:
+        # names first: pyarrow refuses duplicate names with a message that does not say so
+        _no_duplicates([str(c) for c in pq.read_schema(path).names], src, "column")
+        table = pq.read_table(path)
+    except FogbayesError:
+        raise
+    except MemoryError:
+        raise
+    except Exception as exc:  # pyarrow raises ArrowInvalid, ArrowIOError, OSError, ...
+        raise FileFormatError(f"cannot read as Parquet ({_first_line(exc)})", file=src,
+                              fix=fix) from None
+    names = [str(c) for c in table.column_names]
+    _no_duplicates(names, src, "column")
+    cols = {}
+    for j, name in enumerate(names):
+        try:
+            cols[name] = table.column(j).to_numpy(zero_copy_only=False)
+        except MemoryError:
+            raise
+        except Exception as exc:
+            raise FileFormatError(f"cannot read column as an array ({_first_line(exc)})",
+                                  file=src, column=name,
+                                  fix="store every column as plain numbers") from None
+    raw = (table.schema.metadata or {}).get(b"fogbayes")
+    meta = {} if raw is None else _json_meta(raw, src, "the schema metadata 'fogbayes'")
+    return Table(cols, meta)
+
+
+def _json_meta(raw, src: str, where: str) -> dict:
+    try:
+        meta = json.loads(raw.decode("utf-8") if isinstance(raw, bytes) else raw)
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise MetadataError(f"{where} is not JSON ({_first_line(exc)})", file=src,
+                            fix="write the file with fogbayes.save (metadata as a JSON "
+                                "object)") from None
+    if not isinstance(meta, dict):
+        raise MetadataError(f"{where} is a JSON {type(meta).__name__}, not an object",
+                            file=src, fix="store the metadata as a JSON object "
+                                          "{\"unit\": ..., \"sample_rate\": ...}")
+    return meta
+
+
+def _no_duplicates(names: list[str], src: str, what: str) -> None:
+    seen: dict[str, int] = {}
+    for k, name in enumerate(names):
+        if name in seen:
+            raise DuplicateColumnError(
+                f"two {what}s are named '{name}' (positions {seen[name] + 1} and {k + 1})",
+                file=src, column=name, fix="give every column its own name")
+        seen[name] = k
+
+
+# -- NPZ -------------------------------------------------------------------------------
+_NPZ_FIX = "write it with numpy.savez (or fogbayes.save), one 1-D numeric array per column"
+
+
+def read_npz(path: Path) -> Table:
+    """Read an NPZ recording without trusting its headers (see the module doc)."""
+    src = str(path)
+    try:
+        with zipfile.ZipFile(path) as zf:
+            infos = zf.infolist()
+            names = [info.filename for info in infos]
+            bad = [n for n in names if not n.endswith(".npy")]
+            if bad:
+                raise FileFormatError(f"archive member '{bad[0]}' is not a .npy array",
+                                      file=src, fix=_NPZ_FIX)
+            keys = [n[:-4] for n in names]
+            _no_duplicates(keys, src, "array")
+            arrays = {key: _read_member(zf, info, key, src) for key, info in zip(keys, infos)}
+    except FogbayesError:
+        raise
+    except MemoryError:
+        raise
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, EOFError, ValueError,
+            zlib.error, NotImplementedError, RuntimeError, KeyError, OverflowError) as exc:
+        raise FileFormatError(f"cannot read as NPZ ({_first_line(exc)})", file=src,
+                              fix=_NPZ_FIX) from None
+    meta_arr = arrays.pop("__meta__", None)
+    meta = {} if meta_arr is None else _json_meta(str(meta_arr[()]), src, "the '__meta__' array")
+    length = None
+    for key, arr in arrays.items():
+        if arr.ndim != 1:
+            raise FileFormatError(f"array '{key}' has shape {arr.shape}, expected 1-D", file=src,
+                                  column=key, fix="store one 1-D array per column")
+        if length is None:
+            length = (key, arr.size)
+        elif arr.size != length[1]:
+            raise ShapeError(f"array '{key}' has {arr.size} rows but '{length[0]}' has "
+                             f"{length[1]}", file=src, column=key,
+                             fix="store columns of one length (one value per time stamp)")
+    return Table(arrays, meta)
+
+
+def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, src: str) -> np.ndarray:
+    fmt = np.lib.format
+    with zf.open(info) as fh:
+        version = fmt.read_magic(fh)
+        if version == (1, 0):
+            shape, fortran, dtype = fmt.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, fortran, dtype = fmt.read_array_header_2_0(fh)
+        else:
+            shape, fortran, dtype = fmt._read_array_header(fh, version)
+        if key == "__meta__":
+            if dtype.kind not in "US" or shape != ():
+                raise MetadataError("the '__meta__' array is not a JSON string", file=src,
+                                    fix="store the metadata as numpy.array(json.dumps(meta))")
+        elif dtype.hasobject:
+            raise FileFormatError(f"array '{key}' holds Python objects (pickled data is never "
+                                  "loaded)", file=src, column=key, fix=_NPZ_FIX)
+        elif dtype.kind not in "biuf" or dtype.fields is not None:
+            raise FileFormatError(f"array '{key}' has dtype {dtype}, not real numbers",
+                                  file=src, column=key, fix=_NPZ_FIX)
+        count = math.prod(shape)
+        need = count * dtype.itemsize
+        have = info.file_size - fh.tell()
+        if need != have:  # check the declared shape against the bytes before allocating
+            raise FileFormatError(f"array '{key}' declares shape {shape} ({need} bytes) but the "
+                                  f"archive holds {have} bytes of it", file=src, column=key,
+                                  fix="the file is damaged or truncated: write it again")
+        data = fh.read(need)
+        if len(data) != need or fh.read(1):  # reading to the end checks the CRC
+            raise FileFormatError(f"array '{key}' is truncated ({len(data)} of {need} bytes)",
+                                  file=src, column=key, fix="the file is damaged: write it again")
+    arr = np.frombuffer(data, dtype=dtype, count=count)
+    return arr.reshape(shape[::-1]).T if fortran else arr.reshape(shape)
+
+
+# -- metadata values -------------------------------------------------------------------
+def meta_float(table: Table, key: str, src: str, *, what: str) -> float | None:
+    """A metadata number that must be finite and > 0 (None when absent)."""
+    v = table.meta.get(key)
+    if v is None or (isinstance(v, str) and v.strip() in _NONE):
+        return None
+    line = table.meta_lines.get(key)
+    fix = (f"write a plain number ({what}), e.g. '# {key}: 10', or delete the line" if line
+           else f"store '{key}' as a plain number ({what})")
+    if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+        raise MetadataError(f"metadata '{key}' is {v!r} ({type(v).__name__}), not a number",
+                            file=src, line=line, fix=fix)
+    try:
+        x = float(v)
+    except ValueError:
+        raise MetadataError(f"metadata '{key}' is {v!r}, not a number", file=src, line=line,
+                            fix=fix) from None
+    if not math.isfinite(x) or x <= 0:
+        raise MetadataError(f"metadata '{key}' is {v!r}; it must be a finite number > 0",
+                            file=src, line=line, fix=fix)
+    return x
+
+
+def meta_text(table: Table, key: str, src: str) -> str | None:
+    """A metadata string (numbers are accepted as text; lists and objects are not)."""
+    v = table.meta.get(key)
+    if v is None:
+        return None
+    if isinstance(v, bool) or not isinstance(v, (str, int, float)):
+        raise MetadataError(f"metadata '{key}' is {v!r} ({type(v).__name__}), not text",
+                            file=src, line=table.meta_lines.get(key),
+                            fix=f"store '{key}' as a string")
+    return str(v).strip()
+
+
+def meta_unit(table: Table, src: str) -> str:
+    """The file's output unit (default deg/h), checked against the known units."""
+    from ..units import KNOWN_UNITS, normalise_unit
+
+    v = meta_text(table, "unit", src)
+    if v in (None, *_NONE):
+        return "deg/h"
+    try:
+        return normalise_unit(v)
+    except UnitError:
+        raise UnitError(f"unknown output unit {v!r} in the file's metadata 'unit'", file=src,
+                        line=table.meta_lines.get("unit"),
+                        fix=f"use one of {', '.join(KNOWN_UNITS)}, or override it with "
+                            "--output-unit (unit= in fogbayes.load)") from None
+
+
+# -- arguments -------------------------------------------------------------------------
+def time_divisor(time_unit: str) -> float:
+    """Seconds per ``time_unit`` as a divisor (``ms`` -> 1000)."""
+    div = TIME_UNITS.get(str(time_unit).strip())
+    if div is None:
+        raise ArgumentError(f"unknown time unit {time_unit!r}", column="--time-unit",
+                            fix="use s, ms, us or ns (time_unit= in fogbayes.load)")
+    return div
+
+
+def finite(value, name: str, *, nonzero: bool = False, positive: bool = False) -> float:
+    """An argument that must be a finite number (and non-zero / > 0)."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = float("nan")
+    if not math.isfinite(x) or (nonzero and x == 0) or (positive and x <= 0):
+        need = "> 0" if positive else "non-zero" if nonzero else "finite"
+        raise ArgumentError(f"{name} is {value!r}; it must be a finite number, {need}",
+                            column=name, fix=f"give {name} a finite number ({need})")
+    return x
+
+
+# -- plausibility ----------------------------------------------------------------------
+def check_plausible(rec, *, src: str, time_column: str, table: Table) -> None:
+    """Refuse a recording whose numbers are valid but physically implausible."""
+    lo, hi = RATE_RANGE
+    if rec.n >= 2:
+        med = float(np.median(np.diff(rec.time)))
+        fs = 1.0 / med
+        if not lo <= fs <= hi:
+            raise ImplausibleValueError(
+                f"the median time step is {med:.6g} s, a sample rate of {fs:.3g} Hz, outside "
+                f"the plausible {lo:g} Hz ... {hi:g} Hz: the times are not in seconds",
+                file=src, column=time_column,
+                fix="name the time unit with --time-unit ms, us or ns (time_unit= in "
+                    "fogbayes.load), or convert the column to seconds")
+        declared = rec.meta.sample_rate
+        if declared and not 1 / RATE_TOLERANCE <= declared / fs <= RATE_TOLERANCE:
+            raise MetadataError(
+                f"metadata 'sample_rate' is {declared:g} Hz but the time stamps step by "
+                f"{med:.6g} s ({fs:.6g} Hz)", file=src,
+                line=table.meta_lines.get("sample_rate"),
+                fix="correct or delete the sample_rate metadata, or check the time unit "
+                    "(--time-unit)")
+    elif rec.meta.sample_rate and not lo <= rec.meta.sample_rate <= hi:
+        raise MetadataError(f"metadata 'sample_rate' is {rec.meta.sample_rate:g} Hz, outside "
+                            f"{lo:g} Hz ... {hi:g} Hz", file=src,
+                            line=table.meta_lines.get("sample_rate"),
+                            fix="correct or delete the sample_rate metadata")
+    t_lo, t_hi = TEMPERATURE_RANGE
+    for j, name in enumerate(rec.temperature_names):
+        col = rec.temperatures[:, j]
+        bad = np.flatnonzero((col < t_lo) | (col > t_hi))
+        if bad.size:
+            raise ImplausibleValueError(
+                f"{bad.size} value(s) outside {t_lo:g} ... {t_hi:g} deg C (first: "
+                f"{col[bad[0]]:g}): raw sensor words or kelvin, not deg C", file=src,
+                column=name, row=int(bad[0]),
+                fix="convert the column to deg C, or scale it on load with "
+                    "--temperature-scale A --temperature-offset B (deg C = A x value + B; "
+                    "kelvin: --temperature-offset -273.15)")
