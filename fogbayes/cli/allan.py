@@ -13,7 +13,9 @@ import typer
 
 from ._app import app
 from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
-                      TIME_COLUMN_OPT, load_recording, progress, say, write_json)
+                      TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
+                      write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 _TAUS = ("octave", "decade", "dense", "all")
 
@@ -46,8 +48,11 @@ def allan(
     plot: Path = typer.Option(None, "--plot", help="Also write the log-log ADEV figure (PNG/PDF)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Allan deviation with 90 % intervals and the five-term noise fit (Q, N, B, K, R).
@@ -60,15 +65,27 @@ def allan(
           --json av.json
       fogbayes -q allan static.csv --json - > adev.json
     """
-    from ..errors import FogbayesError
+    from ..errors import FogbayesError, about_file
+    from ..data.atomic import atomic_path
     from ..workflow.allan import fit_recording
 
+    refuse_overwrite({"the recording": rec}, {"--json": json_out, "--plot": plot})
     if taus not in _TAUS:
         raise FogbayesError(f"unknown tau grid '{taus}'", column="--taus",
                             fix=f"use one of {', '.join(_TAUS)}")
+    if per_decade < 1:
+        raise FogbayesError(f"--per-decade is {per_decade}; it must be >= 1",
+                            column="--per-decade", fix="give e.g. --per-decade 20")
+    if plot is not None:
+        from ..plot.style import figure_format
+
+        figure_format(plot)  # an unknown extension fails now, not after the fit
     recording = load_recording(rec, column=column, time_column=time_column,
-                               output_unit=output_unit, scale_factor=scale_factor)
-    with progress("Allan deviation and noise fit" + (" (posterior)" if bayes else "")):
+                               output_unit=output_unit, scale_factor=scale_factor,
+                               time_unit=time_unit, temperature_scale=temperature_scale,
+                               temperature_offset=temperature_offset)
+    with progress("Allan deviation and noise fit" + (" (posterior)" if bayes else "")), \
+            about_file(rec):
         doc = fit_recording(recording, model="allan", bayes=bayes, seed=seed, taus=taus,
                             per_decade=per_decade)
     write_json(doc, json_out)
@@ -78,6 +95,6 @@ def allan(
         from ..plot.allan import allan_figure
 
         fig = allan_figure(doc)
-        plot.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(plot, dpi=150)
+        with atomic_path(plot) as tmp:  # the suffix is kept: PNG or PDF from the name
+            fig.savefig(tmp, dpi=150)
         say(f"wrote {plot}")

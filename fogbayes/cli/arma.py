@@ -8,7 +8,9 @@ import typer
 
 from ._app import app
 from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
-                      TIME_COLUMN_OPT, load_recording, progress, say, write_json)
+                      TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
+                      write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 
 @app.command()
@@ -31,8 +33,11 @@ def arma(
                               "prediction, filtered signal and removed noise."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Identify, fit and check an ARMA model of the gyro drift; filter the record.
@@ -44,11 +49,26 @@ def arma(
       fogbayes arma static.csv --candidates grid --criterion aic --json arma.json
       fogbayes -q arma static.csv --output-unit deg/s --json - > arma.json
     """
+    from ..data.atomic import atomic_path
+    from ..errors import ArgumentError, about_file
     from ..workflow.arma import analyse_recording
 
+    refuse_overwrite({"the recording": rec_path}, {"--json": json_out, "--plot": plot})
+    for flag, value, least in (("--decimate", decimate, 1), ("--detrend", detrend, 0),
+                               ("--lags", lags, 1)):
+        if value is not None and value < least:
+            raise ArgumentError(f"{flag} is {value}; it must be an integer >= {least}",
+                                column=flag, fix=f"give {flag} {least} or more"
+                                + (" (or leave it out: min(20, n/5))" if flag == "--lags" else ""))
+    if plot is not None:
+        from ..plot.style import figure_format
+
+        figure_format(plot)  # an unknown extension fails now, not after the fit
     rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=output_unit, scale_factor=scale_factor)
-    with progress("fitting ARMA candidates"):
+                         output_unit=output_unit, scale_factor=scale_factor,
+                         time_unit=time_unit, temperature_scale=temperature_scale,
+                         temperature_offset=temperature_offset)
+    with progress("fitting ARMA candidates"), about_file(rec_path):
         result = analyse_recording(rec, decimate=decimate, detrend_order=detrend,
                                    candidates=candidates, criterion=criterion, lags=lags,
                                    bayes=bayes, seed=seed)
@@ -58,8 +78,8 @@ def arma(
     if plot is not None:
         from ..plot.arma import analysis_figure
 
-        plot.parent.mkdir(parents=True, exist_ok=True)
-        analysis_figure(result).savefig(plot, dpi=120)
+        with atomic_path(plot) as tmp:  # the suffix is kept: the format from the name
+            analysis_figure(result).savefig(tmp, dpi=120)
         say(f"wrote {plot}")
     w = doc["whiteness"]
     say(f"selected {doc['selected']} by {criterion.upper()}; converged={doc['converged']}; "

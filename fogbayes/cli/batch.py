@@ -16,7 +16,9 @@ import typer
 
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
-                      TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, say, write_json)
+                      TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, refuse_overwrite, say,
+                      write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 _EPILOG = """Examples:
 
@@ -58,24 +60,44 @@ def batch(
     json_out: str = typer.Option(None, "--json", help="Also write the summary here ('-' = stdout)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
-    """Fit, compensate, loop or report every recording of a folder, in-process or on Dask."""
+    """Fit, compensate, loop or report every recording of a folder, in-process or on Dask.
+
+    Every output is written atomically; summary.json is removed when the work starts and written last, so it exists only for a finished run. On a re-run into the same folder, a recording's outputs from the earlier run that this run did not write (e.g. the old .fit.json of a recording that now fails) are removed; files of other recordings are left alone.
+    """
     from ..batch import JobOptions, find_recordings, run_batch
+    from ..batch.jobs import OUTPUT_SUFFIXES
     from .fit import parse_option_pairs
 
     # the keywords of fogbayes.data.load, as load_recording passes them (every file alike)
     load = {"time": time_column, "output": column, "unit": output_unit,
             "scale_factor": scale_factor, "temperature": temperature or None,
-            "input_rate": input_rate}
+            "input_rate": input_rate, "time_unit": time_unit,
+            "temperature_scale": temperature_scale, "temperature_offset": temperature_offset}
+    from ..data._read import finite, time_divisor
+
+    time_divisor(time_unit)  # bad reading options: exit 2 now, not one failure per file
+    finite(temperature_scale, "--temperature-scale", nonzero=True)
+    finite(temperature_offset, "--temperature-offset")
+    if scale_factor is not None:
+        finite(scale_factor, "--scale-factor", positive=True)
     opts = JobOptions(orders=orders, seed=seed, fit_options=parse_option_pairs(option),
                       load=load, bayes=bayes, max_steps=max_steps, alpha=alpha)
     where = f"dask ({address or f'local cluster, {workers} workers'})" if engine == "dask" else engine
-    n_files = len(find_recordings(folder, pattern))  # bad folder/pattern: exit 2 right away
+    files = find_recordings(folder, pattern)  # bad folder/pattern: exit 2 right away
+    n_files = len(files)
+    refuse_overwrite({"a recording": files},
+                     {"--json": json_out,
+                      "a per-recording output": [Path(out) / f"{f.stem}{sfx}" for f in files
+                                                 for sfx in OUTPUT_SUFFIXES.get(task, ())]})
     with progress(f"{task} {model}: {n_files} recordings [{where}]", total=n_files) as advance:
         def done(row: dict) -> None:
             advance(1)

@@ -14,24 +14,16 @@ import typer
 
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, QUIET_OPT, REC_ARG, TEMPERATURE_OPT,
-                      TIME_COLUMN_OPT, load_recording, progress, say, write_json)
+                      TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
+                      write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 
 def read_fit(path: Path) -> dict:
-    """The fit document at ``path`` (a FogbayesError names the file when it is not one)."""
-    from ..errors import FileFormatError
+    """The validated fit document at ``path`` (:mod:`fogbayes.data.documents`)."""
+    from ..data.documents import read_fit_document
 
-    try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise FileFormatError("file not found", file=str(path), fix="check the --params path") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise FileFormatError(f"not valid JSON ({exc})", file=str(path),
-                              fix="pass the JSON written by 'fogbayes fit --json'") from None
-    if not isinstance(doc, dict) or "model" not in doc:
-        raise FileFormatError("not a fit document (no 'model' key)", file=str(path),
-                              column="model", fix="pass the JSON written by 'fogbayes fit --json'")
-    return doc
+    return read_fit_document(path)
 
 
 def summary(rec, fit_doc: dict, cols: dict, *, rec_path, params, out) -> dict:
@@ -61,14 +53,19 @@ def compensate(
                                  "outliers, bias stability before/after) ('-' = stdout)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = typer.Option(None, "--output-unit", show_default=False,
                                     rich_help_panel="Reading the recording",
-                                    help="Output unit (default: the one the fit used)."),
+                                    help="Output unit; says which is right when the file's '# unit:' "
+                                    "line and the fit's unit differ (default: those, which "
+                                    "must agree)."),
     scale_factor: float = typer.Option(None, "--scale-factor", show_default=False,
                                        rich_help_panel="Reading the recording",
                                        help="Raw units per deg/s (default: the fit's)."),
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     stream: bool = typer.Option(False, "--stream",
                                 help="Bounded memory, chunk by chunk: REC is .npz, .parquet, "
                                 "a .npy or a folder of <column>.npy; OUT is .npz, .parquet "
@@ -88,9 +85,11 @@ def compensate(
       fogbayes compensate big.parquet -p fit.json -o comp.parquet --stream
     """
     from ..data import write_csv_mixed
-    from ..errors import FogbayesError
+    from ..errors import FogbayesError, about_file
     from ..workflow import workflow_for
 
+    refuse_overwrite({"the recording": rec, "the --params document": params},
+                     {"--out": out, "--json": json_out})
     fit_doc = read_fit(params)
     wf = workflow_for(str(fit_doc["model"]))
     if getattr(wf, "compensate_recording", None) is None:
@@ -98,16 +97,26 @@ def compensate(
                             "compensate", file=str(params), column="model",
                             fix="compensate with a bias-t, thermal or composite fit")
     given = fit_doc.get("input") or {}
+    from ..data.documents import agreed_unit, check_channels
+
+    unit = agreed_unit(fit_doc, str(params), rec, output_unit)  # file, document, option agree
     if stream:
         from ..stream import compensate_stream, open_source
+
+        if time_unit != "s" or temperature_scale != 1.0 or temperature_offset != 0.0:
+            raise FogbayesError("--stream reads time in s and temperatures in deg C as they "
+                                "are", column="--stream",
+                                fix="convert the file first, or drop --stream (--time-unit "
+                                    "and --temperature-scale/-offset work in memory)")
 
         src = open_source(rec, time=time_column or "time", output=column or "output",
                           temperature=list(temperature or []) or None,
                           input_rate=input_rate or "input_rate",
-                          unit=output_unit or given.get("unit"),
+                          unit=unit,
                           scale_factor=scale_factor if scale_factor is not None
                           else given.get("scale_factor"))
-        with progress(f"compensating {rec} in chunks of {chunk_rows} rows ({fit_doc['model']})"):
+        with progress(f"compensating {rec} in chunks of {chunk_rows} rows ({fit_doc['model']})"), \
+                about_file(rec):
             res = compensate_stream(src, fit_doc, out, rows=chunk_rows)
         say(f"wrote {res.path}: {res.n} rows, {res.outliers} flagged as outliers")
         if json_out:
@@ -116,11 +125,14 @@ def compensate(
                         "columns": list(res.columns), "passes": res.passes}, json_out)
         return
     recording = load_recording(rec, column=column, time_column=time_column,
-                               output_unit=output_unit or given.get("unit"),
+                               output_unit=unit,
                                scale_factor=scale_factor if scale_factor is not None
                                else given.get("scale_factor"),
-                               temperature=temperature, input_rate=input_rate)
-    with progress(f"compensating {recording.n} samples ({fit_doc['model']})"):
+                               temperature=temperature, input_rate=input_rate,
+                               time_unit=time_unit, temperature_scale=temperature_scale,
+                               temperature_offset=temperature_offset)
+    check_channels(fit_doc, str(params), recording)
+    with progress(f"compensating {recording.n} samples ({fit_doc['model']})"), about_file(rec):
         cols = wf.compensate_recording(recording, fit_doc)
         write_csv_mixed(out, cols)
     n_out = int(cols["outlier"].sum()) if "outlier" in cols else 0

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import QUIET_OPT, progress, say, write_json
+from ._common import QUIET_OPT, progress, refuse_overwrite, say, write_json
 
 
 def summary_document(result) -> dict:
@@ -43,6 +43,8 @@ def demo(
     """
     from ..demo import run_demo
 
+    refuse_overwrite({}, {"the report": out / "report.html",
+                          "the recording": out / "demo_recording.csv", "--json": json_out})
     with progress("fogbayes demo", total=5) as advance:
         def step(msg):
             say(msg)

@@ -15,12 +15,72 @@ import typer
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      progress, say, write_json)
+                      progress, refuse_overwrite, say, write_json)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 
-def parse_option_pairs(items: list[str] | None) -> dict:
-    """``KEY=VALUE`` pairs (VALUE as JSON when it parses, else as text) -> dict."""
-    from ..errors import FogbayesError
+#: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
+#: here so that ``-O n_sigma=abc`` is one line naming the option, not a traceback.
+_OPTION_TYPES = {
+    # thermal processing (fogbayes.workflow._thermal_data.Processing) and model structure
+    "processing": "text", "average_s": "positive", "temperature_average_s": "positive",
+    "rate_method": "text", "rate_window_s": "positive", "outliers": "text",
+    "n_sigma": "positive", "rate_gap_factor": "positive or null", "cross": "bool",
+    "extra": "texts", "extra_order": "count", "temperature": "text or null",
+    "order_criterion": "text", "windows": "positives",
+    # posterior (thermal, allan, composite)
+    "noise": "text", "ar_order": "integer", "ma_order": "integer", "num_warmup": "count",
+    "num_samples": "count", "num_chains": "count", "level": "fraction",
+    "bayes_average_s": "positive",
+    # allan
+    "taus": "text", "per_decade": "count", "select": "bool",
+    # composite
+    "method": "text", "operating_time": "text", "T_nominal": "number", "compensation": "text",
+    "rate_tolerance": "non-negative", "temperature_tolerance": "non-negative",
+    "rate_threshold": "non-negative", "min_duration": "non-negative", "trim_s": "non-negative",
+    "stable_s": "non-negative", "smooth_s": "non-negative",
+    # arma (fogbayes.workflow.arma.analyse_recording)
+    "decimate": "count", "detrend_order": "integer", "candidates": "text", "criterion": "text",
+    "lags": "count", "nlags": "count",
+}
+#: The only options the ARMA workflow takes (it has no check of its own for unknown ones).
+_ARMA_OPTIONS = ("decimate", "detrend_order", "candidates", "criterion", "lags", "nlags")
+
+
+def _typed(key: str, value, kind: str) -> bool:
+    """Whether ``value`` (parsed JSON) is of the option type ``kind``."""
+    import math
+
+    def number(v) -> bool:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+    if kind.endswith(" or null") and value is None:
+        return True
+    kind = kind.removesuffix(" or null")
+    if kind == "text":
+        return isinstance(value, str)
+    if kind == "texts":
+        return isinstance(value, str) or (isinstance(value, list)
+                                          and all(isinstance(v, str) for v in value))
+    if kind == "bool":
+        return isinstance(value, bool)
+    if kind in ("integer", "count"):
+        return number(value) and float(value).is_integer() and value >= (kind == "count")
+    if kind == "positives":
+        return isinstance(value, list) and bool(value) and all(number(v) and v > 0 for v in value)
+    if not number(value):
+        return False
+    return {"number": True, "positive": value > 0, "non-negative": value >= 0,
+            "fraction": 0 < value < 1}[kind]
+
+
+def parse_option_pairs(items: list[str] | None, model: str | None = None) -> dict:
+    """``KEY=VALUE`` pairs (VALUE as JSON when it parses, else as text) -> dict.
+
+    Known keys are type-checked (:data:`_OPTION_TYPES`); unknown ones are left to the
+    model's workflow, which names the options it takes.
+    """
+    from ..errors import ArgumentError, FogbayesError
 
     out = {}
     for item in items or []:
@@ -28,11 +88,36 @@ def parse_option_pairs(items: list[str] | None) -> dict:
         if not sep or not key.strip():
             raise FogbayesError(f"option '{item}' is not KEY=VALUE", column="--option",
                                 fix="write e.g. --option rate_window_s=30")
+        key = key.strip().replace("-", "_")
         try:
-            out[key.strip().replace("-", "_")] = json.loads(value)
-        except json.JSONDecodeError:
-            out[key.strip().replace("-", "_")] = value
+            parsed = json.loads(value)
+        except (json.JSONDecodeError, RecursionError):
+            parsed = value
+        kind = _OPTION_TYPES.get(key)
+        if kind is not None and not _typed(key, parsed, kind):
+            what, example = _KINDS[kind]
+            raise ArgumentError(f"-O {key}={value}: {key} must be {what}", column="--option",
+                                fix=f"write e.g. -O {key}={example}")
+        if kind in ("integer", "count"):
+            parsed = int(parsed)
+        elif kind == "texts" and isinstance(parsed, str):  # one name: a list of one
+            parsed = [parsed]
+        if model == "arma" and key not in _ARMA_OPTIONS:
+            raise ArgumentError(f"unknown option '{key}' for model arma", column="--option",
+                                fix=f"use {', '.join(_ARMA_OPTIONS)}")
+        out[key] = parsed
     return out
+
+
+_KINDS = {  # kind -> (what it is, an example value)
+    "text": ("a word", "paper"), "texts": ("a name or a JSON list of names", "temperature_2"),
+    "text or null": ("a name or null", "temperature"), "bool": ("true or false", "true"),
+    "integer": ("an integer >= 0", "2"), "count": ("an integer >= 1", "500"),
+    "positive": ("a number > 0", "3"), "positive or null": ("a number > 0 or null", "2"),
+    "non-negative": ("a number >= 0", "0.5"), "number": ("a number", "20"),
+    "fraction": ("a number between 0 and 1", "0.9"),
+    "positives": ("a JSON list of numbers > 0", "[1,10,100]"),
+}
 
 
 def summary_line(doc: dict) -> str:
@@ -62,10 +147,13 @@ def fit(
     strict: bool = typer.Option(False, help="Exit with code 1 when the fit did not converge."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Fit a model to a recording and write the fit document as JSON.
@@ -79,21 +167,28 @@ def fit(
       fogbayes fit chamber.csv -m thermal --processing paper --json fit.json
       fogbayes -q fit table.csv -m composite --json - > fit.json
     """
+    from ..errors import about_file
     from ..workflow import workflow_for
 
+    refuse_overwrite({"the recording": rec}, {"--json": json_out})
     wf = workflow_for(model)
-    options = parse_option_pairs(option)
+    options = parse_option_pairs(option, model)
     for key, value in (("processing", processing), ("noise", noise)):
         if value is not None:
             options[key] = value
     recording = load_recording(rec, column=column, time_column=time_column,
                                output_unit=output_unit, scale_factor=scale_factor,
-                               temperature=temperature, input_rate=input_rate)
-    with progress(f"fitting {model} to {recording.n} samples" + (" (posterior)" if bayes else "")):
+                               temperature=temperature, input_rate=input_rate,
+                               time_unit=time_unit, temperature_scale=temperature_scale,
+                               temperature_offset=temperature_offset)
+    with progress(f"fitting {model} to {recording.n} samples" + (" (posterior)" if bayes else "")), \
+            about_file(rec):
         doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,
                                **options)
     write_json(doc, json_out)
     say(summary_line(doc))
+    for warning in doc.get("warnings") or []:  # e.g. not identifiable, gross errors flagged
+        say(f"warning: {warning}")
     if strict and not doc.get("converged", False):
         say("the fit did not converge (--strict)")
         raise typer.Exit(1)

@@ -20,6 +20,10 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       progress, refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
+#: Fewer samples than this give a loop without power that looks like a clean result:
+#: refused (the residual whiteness tests use up to 20 lags, 5 samples a lag).
+LOOP_MIN_SAMPLES = 100
+
 
 @app.command(name="loop")
 def loop(
@@ -66,7 +70,7 @@ def loop(
           --json loop.json --compensated comp.csv
     """
     from ..data.io import write_csv_mixed
-    from ..errors import FogbayesError
+    from ..errors import FogbayesError, TooShortError, about_file
     from ..loop import run_loop
 
     refuse_overwrite({"the recording": rec_path, "the --noise-prior document": noise_prior},
@@ -84,7 +88,13 @@ def loop(
                          temperature=temperature, input_rate=input_rate,
                          time_unit=time_unit, temperature_scale=temperature_scale,
                          temperature_offset=temperature_offset)
-    with progress(f"closed loop on {rec_path.name} ({model})"):
+    if rec.n < LOOP_MIN_SAMPLES:
+        raise TooShortError(f"the closed loop needs at least {LOOP_MIN_SAMPLES} samples (20 "
+                            f"blocks or more, residual tests over 20 lags), the recording has "
+                            f"{rec.n}", file=str(rec_path),
+                            fix=f"give a recording of {LOOP_MIN_SAMPLES} samples or more "
+                                "(effects need several cycles of their driver: hours of data)")
+    with progress(f"closed loop on {rec_path.name} ({model})"), about_file(rec_path):
         res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed,
                        noise_prior=prior)
     write_json(res.to_json(), json_out)

@@ -11,7 +11,8 @@ from ..errors import FileFormatError
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      progress, say)
+                      progress, refuse_overwrite, say)
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 
 
 def _read_json(path: Path, what: str) -> dict:
@@ -37,10 +38,13 @@ def report(
     seed: int = typer.Option(0, help="Random seed of the samplers."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
     input_rate: str = INPUT_RATE_OPT,
+    temperature_scale: float = TEMPERATURE_SCALE_OPT,
+    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Write a calibration report: recording, fitted model, residuals, compensation, noise.
@@ -52,14 +56,22 @@ def report(
       fogbayes report chamber.csv --fit fit.json --pdf report.pdf
       fogbayes report chamber.csv --loop loop.json --out loop_report.html
     """
+    from ..errors import about_file
     from ..workflow.report import build_report, print_pdf
 
+    refuse_overwrite({"the recording": rec_path, "the --fit document": fit,
+                      "the --loop document": loop_json}, {"--out": out, "--pdf": pdf})
+    from ..data.documents import agreed_unit, read_fit_document
+
+    fit_doc = read_fit_document(fit) if fit else None  # validated; its unit must agree
     rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=output_unit, scale_factor=scale_factor,
-                         temperature=temperature, input_rate=input_rate)
-    fit_doc = _read_json(fit, "fit") if fit else None
+                         output_unit=agreed_unit(fit_doc, str(fit), rec_path, output_unit)
+                         if fit_doc else output_unit, scale_factor=scale_factor,
+                         temperature=temperature, input_rate=input_rate,
+                         time_unit=time_unit, temperature_scale=temperature_scale,
+                         temperature_offset=temperature_offset)
     loop_res = None
-    with progress("building the report"):
+    with progress("building the report"), about_file(rec_path):
         if loop_json:
             from ..loop import run_loop
 

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import typer
 
 from ._app import app
-from ._common import QUIET_OPT, progress, say, write_json
+from ._common import QUIET_OPT, progress, refuse_overwrite, say, write_json
 
 
 @app.command()
@@ -39,7 +40,8 @@ def simulate(
       fogbayes simulate --list
     """
     from ..data import save
-    from ..errors import FogbayesError
+    from ..errors import ArgumentError, FogbayesError
+    from ..simulate.profiles import MAX_SAMPLES
     from ..simulate import EFFECTS, SCENARIOS
     from ..simulate import simulate as run
 
@@ -54,14 +56,28 @@ def simulate(
     if out is None:
         raise FogbayesError("no output file given", column="--out",
                             fix="add --out run.csv (or .parquet / .npz)")
+    refuse_overwrite({}, {"--out": out, "--truth": truth})
+    for flag, value in (("--fs", fs), ("--duration", duration)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ArgumentError(f"{flag} is {value:g}; it must be a finite number > 0", column=flag,
+                                fix=f"give {flag} > 0 or leave it out for the scenario's default")
+    if fs is not None and duration is not None and fs * duration > MAX_SAMPLES:
+        raise ArgumentError(f"--fs {fs:g} for --duration {duration:g} s is {fs * duration:.3g} "
+                            f"samples ({fs * duration * 8 / 1e9:.3g} GB per column), more than "
+                            f"the {MAX_SAMPLES:.0e} a simulated record may have",
+                            column="--duration", fix="lower --duration or --fs")
     effects = {}
     for item in effect or []:
         name, _, params = item.partition("=")
         try:
             effects[name.strip()] = json.loads(params) if params else {}
-        except json.JSONDecodeError as exc:
-            raise FogbayesError(f"parameters of effect '{name}' are not valid JSON ({exc.msg})",
+        except (json.JSONDecodeError, RecursionError) as exc:
+            msg = getattr(exc, "msg", "nested too deeply")
+            raise FogbayesError(f"parameters of effect '{name}' are not valid JSON ({msg})",
                                 column="--effect", fix="write e.g. --effect step='{\"size\": 0.5}'") from None
+        if not isinstance(effects[name.strip()], dict):
+            raise ArgumentError(f"parameters of effect '{name}' are {params}, not a JSON object",
+                                column="--effect", fix="write e.g. --effect step='{\"size\": 0.5}'")
     with progress(f"simulating {scenario}"):
         sim = run(scenario, seed=seed, fs=fs, duration=duration, effects=effects or None)
         save(sim.recording, out)

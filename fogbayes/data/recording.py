@@ -21,7 +21,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import EmptyRecordingError, NonFiniteError, ShapeError, TimeOrderError, TooShortError
+from ..errors import (EmptyRecordingError, NonFiniteError, ShapeError, TimeOrderError, TooShortError,
+                      UnitError)
 from ..units import convert_rate, normalise_unit
 
 
@@ -52,6 +53,20 @@ class SamplingReport(NamedTuple):
     sample_rate: float  # Hz, 1 / dt_median
     irregular: bool  # dt varies by more than 1 % (outside gaps)
     gaps: tuple[Gap, ...]  # intervals longer than 1.5 x the median step
+
+
+def _scale_factor(value, src: str | None) -> float:
+    """A scale factor (raw units per deg/s) must be a finite number > 0."""
+    try:
+        sf = float(value)
+    except (TypeError, ValueError):
+        sf = float("nan")
+    if isinstance(value, bool) or not np.isfinite(sf) or sf <= 0:
+        raise UnitError(f"scale factor {value!r} is not a finite number > 0", file=src,
+                        column="scale_factor",
+                        fix="give the raw units per deg/s, e.g. --scale-factor 0.04 for "
+                            "40 mV/(deg/s)")
+    return sf
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -119,7 +134,7 @@ class Recording:
         object.__setattr__(self, "input_rate", rate)
         object.__setattr__(self, "unit", normalise_unit(self.unit, file=src))
         if self.scale_factor is not None:
-            object.__setattr__(self, "scale_factor", float(self.scale_factor))
+            object.__setattr__(self, "scale_factor", _scale_factor(self.scale_factor, src))
         self._validate()
 
     # -- validation -------------------------------------------------------------------
@@ -143,7 +158,8 @@ class Recording:
             r = int(bad[0]) + 1
             what = "repeats" if dt[bad[0]] == 0 else "goes back from"
             raise TimeOrderError(
-                f"time {what} the previous row ({self.time[r - 1]!r} -> {self.time[r]!r})",
+                f"time {what} the previous row ({float(self.time[r - 1])!r} -> "
+                f"{float(self.time[r])!r})",
                 file=src, column="time", row=r,
                 fix="sort the rows by time and remove duplicate time stamps",
             )

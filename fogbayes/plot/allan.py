@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .style import COLORS, new_figure
+from .style import COLORS, escape_mathtext, new_figure
 
 _TERM_COLORS = {"Q": "#8e44ad", "N": "#16a085", "B": "#d35400", "K": "#2980b9", "R": "#7f8c8d"}
 _TERM_NAMES = {"Q": "quantization", "N": "angle random walk", "B": "bias instability",
@@ -50,7 +50,7 @@ def allan_figure(doc: dict, *, title: str | None = None):
     ax.set_ylim(0.5 * np.nanmin(lo), 2.0 * np.nanmax(hi))
     ax.set_xlabel("averaging time tau (s)")
     ax.set_ylabel(f"Allan deviation ({doc.get('unit', 'deg/h')})")
-    ax.set_title(title or f"Allan deviation, {doc.get('sensor_id', '')}".rstrip(", "))
+    ax.set_title(escape_mathtext(title or f"Allan deviation, {doc.get('sensor_id', '')}".rstrip(", ")))
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
     return fig
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .style import COLORS, new_figure
+from .style import COLORS, LEGEND_RIGHT, escape_mathtext, new_figure
 
 
 def correlogram_figure(acf, pacf, *, title: str = ""):
@@ -22,8 +22,8 @@ def correlogram_figure(acf, pacf, *, title: str = ""):
                         label=f"{100 * (1 - c.alpha):.0f} % band")
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set_xlabel("lag")
-        ax.set_title(f"{name} {title}".strip())
-        ax.legend(loc="upper right")
+        ax.set_title(escape_mathtext(f"{name} {title}".strip()))
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), borderaxespad=0.0)
     return fig
 
 
@@ -40,13 +40,13 @@ def prediction_figure(time, x, prediction, denoised, *, unit: str = "", max_poin
     axes[0].plot(t0, np.asarray(denoised.smoothed)[sl], color=COLORS["after"], lw=1.0,
                  label="Kalman-smoothed signal")
     axes[0].set_ylabel(unit)
-    axes[0].legend(loc="upper right", ncol=3)
-    axes[0].set_title(title or "ARMA one-step prediction and filtering")
+    axes[0].legend(**LEGEND_RIGHT)
+    axes[0].set_title(escape_mathtext(title or "ARMA one-step prediction and filtering"))
     axes[1].plot(t0, np.asarray(denoised.noise)[sl], color=COLORS["data"], lw=0.6,
                  label="removed noise (data - smoothed)")
     axes[1].set_xlabel("time from start (s)")
     axes[1].set_ylabel(unit)
-    axes[1].legend(loc="upper right")
+    axes[1].legend(**LEGEND_RIGHT)
     return fig
 
 
@@ -82,10 +82,10 @@ def analysis_figure(analysis):
                      f"p = {w['ljung_box_p']:.3g}, rho_a2 = {w['rho_a2']:.3g}, "
                      f"rho_ax3 = {w['rho_ax3']:.3g}")
         b1.set_ylabel(doc["unit"])
-        b1.legend(loc="upper right", ncol=3)
+        b1.legend(**LEGEND_RIGHT)
         b2.plot(t0, analysis.denoised.noise[:n], color=COLORS["data"], lw=0.6,
                 label="removed noise")
         b2.set_ylabel(doc["unit"])
         b2.set_xlabel("time from start (s)")
-        b2.legend(loc="upper right")
+        b2.legend(**LEGEND_RIGHT)
     return fig

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .style import COLORS, new_figure
+from .style import COLORS, escape_mathtext, new_figure
 
 
 def binned_means(x: np.ndarray, r: np.ndarray, bins: int = 30):
@@ -22,8 +22,12 @@ def binned_means(x: np.ndarray, r: np.ndarray, bins: int = 30):
 
 
 def plot_residuals(time: np.ndarray, residual: np.ndarray, covariates: dict[str, np.ndarray], *,
-                   unit: str = "deg/h", window_s: float = 10.0):
-    """One panel against time (``window_s`` block means) and one per covariate (binned means)."""
+                   unit: str = "deg/h", window_s: float = 10.0, color: str | None = None):
+    """One panel against time (``window_s`` block means) and one per covariate (binned means).
+
+    Every panel has its y label with the unit; ``color`` is the model's colour
+    (:func:`fogbayes.plot.style.model_color`) so the residual reads as that model's.
+    """
     panels = 1 + len(covariates)
     fig, axes = new_figure(1, panels, figsize=(3.3 * panels, 3.0), squeeze=False)
     axes = axes[0]
@@ -32,12 +36,13 @@ def plot_residuals(time: np.ndarray, residual: np.ndarray, covariates: dict[str,
     n = (time.size // k) * k
     if n:
         axes[0].plot(time[:n].reshape(-1, k).mean(1) / 3600, residual[:n].reshape(-1, k).mean(1),
-                     color=COLORS["data"], lw=0.7)
+                     color=color or COLORS["data"], lw=0.7)
     axes[0].set_xlabel("time [h]")
     axes[0].set_ylabel(f"residual, {window_s:g} s means [{unit}]")
     for ax, (name, x) in zip(axes[1:], covariates.items()):
         c, m, h = binned_means(np.asarray(x, float), np.asarray(residual, float))
-        ax.errorbar(c, m, yerr=h, fmt="o", ms=3, color=COLORS["after"], capsize=1.5)
+        ax.errorbar(c, m, yerr=h, fmt="o", ms=3, color=color or COLORS["after"], capsize=1.5)
         ax.axhline(0.0, color="k", lw=0.6)
-        ax.set_xlabel(name)
+        ax.set_xlabel(escape_mathtext(name))
+        ax.set_ylabel(f"binned mean residual [{unit}]")
     return fig

@@ -25,6 +25,19 @@ from scipy import signal
 
 from ._checks import SimulationParameterError, positive, positive_int
 
+#: The most samples one simulated record may have (8 bytes each, per column: 1.6 GB).
+MAX_SAMPLES = 200_000_000
+
+
+def _not_too_many(n: int, what: str) -> int:
+    """Refuse a record that would exhaust memory, stating its size."""
+    if n > MAX_SAMPLES:
+        raise SimulationParameterError(
+            f"{what} gives {n:.3g} samples ({n * 8 / 1e9:.3g} GB per column), more than the "
+            f"{MAX_SAMPLES:.0e} a simulated record may have", column=what,
+            fix="lower the duration or the sample rate fs")
+    return n
+
 
 class Soak(NamedTuple):
     """Hold the chamber at ``temperature`` (deg C) for ``duration`` s."""
@@ -71,8 +84,9 @@ PAPER000_RATES = (1.0, -1.0, 2.0, -2.0, 5.0, -5.0, 10.0, -10.0, 20.0, -20.0,
 
 def time_grid(duration: float, fs: float) -> np.ndarray:
     """Uniform time stamps k / fs, k = 0 .. floor(duration fs) - 1 (s)."""
-    n = positive_int(int(math.floor(positive(duration, "duration") * positive(fs, "fs") + 1e-9)),
-                     "duration * fs")
+    n = positive_int(_not_too_many(
+        int(math.floor(positive(duration, "duration") * positive(fs, "fs") + 1e-9)),
+        "duration * fs"), "duration * fs")
     return np.arange(n) / fs
 
 
@@ -219,7 +233,7 @@ def rate_table_schedule(*, fs: float = 1.0, dwell: float = 60.0,
     if nT == 0 or nW == 0:
         raise SimulationParameterError("the rate table needs at least one temperature and rate",
                                        column="temperatures", fix="give non-empty grids")
-    k = np.arange(nT * nW * per)
+    k = np.arange(_not_too_many(nT * nW * per, "dwell * fs * cells"))
     cell = k // per
     iT, iW = cell // nW, cell % nW
     if restart == "cell":

@@ -87,6 +87,11 @@ EFFECTS: dict[str, EffectSpec] = {
 }
 
 
+def _number(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) \
+        and bool(np.isfinite(v))
+
+
 def resolve(name: str, params: dict | None, cov: Covariates) -> dict[str, Any]:
     """The effect's full parameter set: defaults updated by ``params``; unknown keys raise."""
     if name not in EFFECTS:
@@ -99,6 +104,18 @@ def resolve(name: str, params: dict | None, cov: Covariates) -> dict[str, Any]:
         raise SimulationParameterError(
             f"effect '{name}' has no parameter(s) {sorted(bad)}", column=name,
             fix=f"use {sorted(spec.defaults)}")
+    for key, value in params.items():  # numbers where the default is a number or a list
+        want = spec.defaults[key]
+        listed = isinstance(want, (list, tuple))
+        if listed:
+            ok = isinstance(value, (list, tuple, np.ndarray)) and \
+                all(_number(v) for v in np.ravel(np.asarray(value, dtype=object)))
+        else:
+            ok = _number(value) or (want is None and value is None)
+        if not ok:
+            what = "a list of numbers" if listed else "a finite number"
+            raise SimulationParameterError(f"effect '{name}': {key}={value!r} is not {what}",
+                                           column=name, fix=f"give e.g. {key}={want!r}")
     full = {**spec.defaults, **params}
     if name == "step" and full["time"] is None:
         full["time"] = float(cov.time[0] + 0.5 * (cov.time[-1] - cov.time[0]))

@@ -227,6 +227,10 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
         raise SimulationParameterError(f"unknown scenario '{scenario}'", column="scenario",
                                        fix=f"use one of {', '.join(SCENARIOS)}")
     seed = seed_int(seed)
+    if fs is not None:  # 0 must not fall back to the default through `fs or 10.0`
+        fs = positive(fs, "fs")
+    if duration is not None:
+        duration = positive(duration, "duration")
     try:
         base = _BUILDERS[scenario](fs, duration, **options)
     except TypeError as exc:  # an option this scenario does not take
