@@ -1,0 +1,101 @@
+"""What users call, timed as they see it: public functions and CLI commands end to end.
+
+Every row is a ratio against the reference a user would otherwise run, measured in the same
+run; absolute times are printed too. Rows:
+
+* ``allan_deviation(y, 1, taus="octave")`` with its intervals (noise identification, EDF)
+  vs allantools ``oadev`` on white noise, 2^20 and 1e7 samples; ``mdev`` and ``ohdev`` on
+  2^20. In one process, warm (compilation paid once before), best of ``--repeat``;
+* ``fogbayes allan FILE.npz --json`` on 1e6 samples in a fresh process vs a fresh-process
+  script that loads the same file and runs allantools ``oadev`` (wall time: import, read,
+  compilation, fit);
+* ``fogbayes fit REC -m thermal --json`` on the 6.3 h, 10 Hz chamber test (fresh process);
+* ``fogbayes --help`` (fresh process; no JAX import).
+
+Run: ``python benchmarks/bench_public.py [--repeat 3] [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _timing import best_of
+
+
+def _wall(cmd: list[str], repeat: int) -> float:
+    def run():
+        subprocess.run(cmd, check=True, capture_output=True)
+    return best_of(run, repeat)
+
+
+def bench_functions(repeat: int, sizes) -> None:
+    import allantools
+
+    from fogbayes.stats.allan import allan_deviation
+
+    refs = {"oadev": allantools.oadev, "mdev": allantools.mdev, "ohdev": allantools.ohdev}
+    print("| call | samples | fogbayes (s) | allantools (s) | ratio |")
+    print("| --- | --- | --- | --- | --- |")
+    for n in sizes:
+        y = np.random.default_rng(0).standard_normal(n)
+        for kind in ("oadev", "mdev", "ohdev") if n <= 1 << 20 else ("oadev",):
+            allan_deviation(y, 1.0, taus="octave", kind=kind)  # compile for this shape
+            a = best_of(lambda: allan_deviation(y, 1.0, taus="octave", kind=kind), repeat)
+            b = best_of(lambda: refs[kind](y, rate=1.0, data_type="freq", taus="octave"), repeat)
+            print(f"| allan_deviation kind={kind} (intervals) | {n} | {a:.3f} | {b:.3f} | "
+                  f"{b / a:.2f} |")
+
+
+def bench_cli(repeat: int, quick: bool) -> None:
+    import fogbayes
+    from fogbayes.simulate import simulate
+
+    exe = [sys.executable, "-m", "fogbayes", "-q"]
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        n = 100_000 if quick else 1_000_000
+        static = simulate("static", seed=1, duration=n / 10.0, fs=10.0).recording
+        fogbayes.save(static, tmp / "static.npz")
+        script = tmp / "plain_allantools.py"
+        script.write_text("import numpy as np, allantools\n"
+                          f"z = np.load('{tmp / 'static.npz'}')\n"
+                          "allantools.oadev(z['output'], rate=10.0, data_type='freq', "
+                          "taus='octave')\n")
+        cli = _wall(exe + ["allan", str(tmp / "static.npz"), "--json", str(tmp / "a.json")],
+                    repeat)
+        ref = _wall([sys.executable, str(script)], repeat)
+        print("| command (fresh process) | fogbayes (s) | reference (s) | fogbayes / reference |")
+        print("| --- | --- | --- | --- |")
+        print(f"| fogbayes allan, {n} samples NPZ | {cli:.2f} | {ref:.2f} (load + allantools "
+              f"oadev script) | {cli / ref:.2f} |")
+        dur, fs = (3600.0, 1.0) if quick else (None, None)
+        chamber = simulate("thermal", seed=0, duration=dur, fs=fs).recording
+        fogbayes.save(chamber, tmp / "chamber.csv")
+        fit = _wall(exe + ["fit", str(tmp / "chamber.csv"), "-m", "thermal", "--json",
+                           str(tmp / "f.json")], repeat)
+        print(f"| fogbayes fit -m thermal, {chamber.n} samples CSV | {fit:.2f} | | |")
+        helps = _wall(exe[:-1] + ["--help"], repeat)
+        print(f"| fogbayes --help | {helps:.2f} | | |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
+    args = ap.parse_args()
+    t0 = time.time()
+    bench_functions(args.repeat, (1 << 14,) if args.quick else (1 << 20, 10_000_000))
+    print()
+    bench_cli(args.repeat, args.quick)
+    print(f"\n({time.time() - t0:.0f} s in all)")
+
+
+if __name__ == "__main__":
+    main()
