@@ -17,7 +17,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable, NamedTuple
 
-import numpy as np
 
 from .data import save
 
@@ -81,26 +80,52 @@ def _summary(rec, fits, stability, report) -> str:
 def _write_report(path, rec, sim, fits, comp, adev, oracle):
     from .plot.demo import plot_adev_compare, plot_compensation
     from .report import sections as S
-    from .report.html import Section, write
+    from .report.bootstrap import stability_intervals
+    from .report.headline import headline_section, improvement_verdict, model_line
+    from .report.html import Section, fmt, fmt_pct, write
     from .workflow.report import covariates
 
-    intro = S.recording_section(rec)
+    import dataclasses
+
+    saved = rec.replace(meta=dataclasses.replace(  # the file written next to the report
+        rec.meta, source=str(Path(path).parent / "demo_recording.csv")))
+    rate = rec.rate("deg/h")
+    after = {m: rec.replace(output=c["output"]).rate("deg/h") for m, c in comp.items()}
+    windows = sorted({row["window_s"] for d in fits.values() for row in d["metrics"]["full"]["stability"]})
+    iv = {w: stability_intervals(rate, after, rec.time, window_s=w) for w in windows}
+    w0 = windows[0]
+    rows = [(f"raw → compensated ({m})", model_line(fits[m]), iv[w0][m]) for m in ("thermal", "bias-t")]
+    # which model is better, with the same resampled blocks: bias-t residual -> thermal residual
+    better = stability_intervals(after["bias-t"], {"thermal": after["thermal"]}, rec.time,
+                                 window_s=w0)["thermal"]
+    verdict, ok = improvement_verdict(iv[w0]["thermal"], "Compensation with thermal")
+    verdict += (f" The declared bias-t model gets {fmt_pct(iv[w0]['bias-t'].improvement_pct.value)}; "
+                f"thermal leaves {fmt_pct(better.improvement_pct.value)} less bias instability than "
+                f"bias-t ({better.level:.0%} interval {fmt(better.improvement_pct.low, sig=3)} … "
+                f"{fmt(better.improvement_pct.high, sig=3)} %): the temperature-rate (Shupe) term "
+                "matters, use thermal.")
+    head = headline_section(
+        saved, model="two models compared: " + model_line(fits["thermal"]) + "; and the commonly "
+        "declared " + model_line(fits["bias-t"]), rows=rows, verdict=verdict, ok=ok)
+    intro = S.recording_section(saved)
     intro.text("Simulated thermal-chamber test: the bias has a quadratic temperature dependence "
                "and a Shupe (temperature-rate) term; the noise is white + flicker + rate random walk. "
                "The model people usually declare, bias-t, lacks the temperature-rate term.")
-    parts = [intro]
+    parts = [head, intro]
     for model, doc in fits.items():
         parts.append(S.model_section(doc))
-        stab = S.stability_section(doc)
+        stab = S.stability_section(doc, {w: iv[w][model] for w in windows})
         stab.title = f"{model}: bias stability before and after"
         parts.append(stab)
-    resid = S.residual_section(rec, comp["bias-t"]["output"], covariates(rec))
+    resid = S.residual_section(rec, comp["bias-t"]["output"], covariates(rec), model="bias-t")
     resid.title = "Residuals after bias-t: what the declared model lacks"
     parts.append(resid)
     parts.append(Section("Compensation").figure(
         plot_compensation(rec, {m: c["output"] for m, c in comp.items()}, oracle),
-        caption="Raw and compensated output (10 s means); the oracle removes the true "
-                "deterministic error and shows the noise floor."))
+        caption="Top: raw and compensated output (10 s means). Bottom: compensated minus the "
+                "oracle (the rate with the TRUE deterministic error removed), i.e. the "
+                "deterministic error each model leaves; 0 is perfect."))
     parts.append(Section("Allan deviation").figure(
-        plot_adev_compare(adev), caption="Overlapping ADEV with 90 % confidence bars."))
+        plot_adev_compare(adev), caption="Overlapping ADEV with 90 % confidence bars; the same "
+                                         "colour per model as in every figure of this report."))
     return write(path, "fogbayes demo: thermal calibration of a simulated FOG", parts)

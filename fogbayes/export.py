@@ -40,6 +40,9 @@ def basis_to_dict(basis: PolyBasis) -> dict:
 
 def basis_from_dict(d: dict, *, source: str | None = None) -> PolyBasis:
     """Inverse of :func:`basis_to_dict` (raises a FogbayesError on a malformed document)."""
+    from .data.documents import check_basis
+
+    check_basis(d, source=source)  # shapes, finite centres, positive scales, exponents 0..8
     try:
         return PolyBasis(tuple(d["covariates"]), tuple(tuple(int(x) for x in e) for e in d["exponents"]),
                          tuple(float(x) for x in d["centre"]), tuple(float(x) for x in d["scale"]))

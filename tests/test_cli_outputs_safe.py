@@ -42,7 +42,8 @@ def files(tmp_path_factory):
     """A recording (CSV and NPZ) and its bias-t fit document, made once."""
     d = tmp_path_factory.mktemp("safe")
     rec = simulate("thermal", seed=1, duration=float(N), fs=1.0).recording
-    csv, npz = save(rec, d / "rec.csv"), save(rec, d / "rec.npz")
+    csv = save(rec, d / "rec.csv")
+    save(rec, d / "rec.npz")  # read by the --stream refusal case
     fit = d / "fit.json"
     assert main(["-q", "fit", str(csv), "-m", "bias-t", "--json", str(fit)]) == 0
     # a tiny allan document: a report from it needs no fit (fast in a subprocess)

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..data.documents import FIT_SCHEMA
 from ..export import coefficient_document
+from ..inference.lsq import conditioning_from_covariance, identifiability
 from ..models.polynomial import rebase_matrices
 
 _RANK_WARNING = ("the design is rank deficient: some covariate does not vary enough (e.g. "
@@ -36,9 +38,16 @@ def fit_documents(recs, model: str, spec, proc, bases, fits, lo, hi, n_blocks, n
     out = []
     for s, rec in enumerate(recs):
         basis = bases[s]
+        # the condition number from Cov = s^2 (X^T W X)^-1: a fleet fit keeps no design
+        ident = identifiability(basis, lo[s], hi[s],
+                                conditioning_from_covariance(fits.cov[s], fits.s2[s]))
+        warnings = [] if ok[s] else [_RANK_WARNING]
+        if not ident["identifiable"]:
+            warnings.append(f"not identifiable: {ident['reason']}; the coefficients are "
+                            "meaningless")
         out.append({
-            "model": model, "fogbayes_version": version, "converged": bool(ok[s]),
-            "warnings": [] if ok[s] else [_RANK_WARNING],
+            "schema": FIT_SCHEMA, "model": model, "fogbayes_version": version,
+            "converged": bool(ok[s]) and ident["identifiable"], "warnings": warnings,
             "input": {"source": rec.meta.source, "sensor_id": rec.meta.sensor_id,
                       "unit": rec.unit, "scale_factor": rec.scale_factor, "n": rec.n},
             "params": {"spec": spec._asdict(), **coefficient_document(
@@ -48,6 +57,7 @@ def fit_documents(recs, model: str, spec, proc, bases, fits, lo, hi, n_blocks, n
             "processing": proc._asdict(),
             "outliers": {"method": proc.outliers, "n_sigma": proc.n_sigma,
                          "count": flagged[s]},
+            "diagnostics": {"identifiability": ident},
             "fit": {"n_blocks": n_blocks[s], "n_params": p, "rms_criterion": rms[s],
                     "residual_std": float(np.sqrt(s2[s])), "dof": int(dof[s]),
                     "stderr_note": "least-squares standard errors assume white block means; "

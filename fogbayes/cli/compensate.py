@@ -7,7 +7,6 @@ input unit (``rate`` in deg/s for the composite model) and a boolean ``outlier``
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import typer

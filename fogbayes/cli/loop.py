@@ -104,7 +104,7 @@ def loop(
     if report is not None:
         from ..plot.loop import loop_report
 
-        loop_report(res, report, title=f"Closed loop: {rec_path.name}")
+        loop_report(res, report, title=f"Closed loop: {rec_path.name}", rec=rec)
         say(f"wrote {report}")
     if prior is not None:
         say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")

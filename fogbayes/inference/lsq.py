@@ -131,6 +131,115 @@ def _finish(X, y, w, sw, Q, Rinv, full_rank, xp) -> FitResult:
                      0.5 * wrss, s2, dof)
 
 
+# -- identifiability: is the design well enough conditioned for the coefficients to mean
+#    something? ---------------------------------------------------------------------------
+#: Condition number of the centred, scaled (row-weighted) design above which the fit is
+#: reported as not identifiable. A centred, scaled polynomial design has cond ~ 1e1 ... 1e3
+#: (paper-style thermal and bias-t fits: 2 ... 60); at 1e6 a combination of the terms with
+#: norm 1 changes the fitted values by only 1e-6 of what the best-determined one does, so
+#: the data cannot tell those terms apart and their coefficients are set by the noise
+#: (standard errors inflated ~1e6 times) and by rounding.
+CONDITION_LIMIT = 1e6
+#: A covariate whose range in the fit data is below this fraction of max(1, |value|) (deg C,
+#: deg C/min) does not vary: its scaled column is rounding noise or zero. 1e-8 deg C is four
+#: orders below any thermometer's resolution.
+CONSTANT_RTOL = 1e-8
+
+
+class Conditioning(NamedTuple):
+    """Singular values (descending) and right singular vectors (rows of ``vectors``, same
+    order) of the row-weighted design ``sqrt(w) X``; ``condition_number`` = s_max / s_min
+    (inf when rank deficient)."""
+
+    condition_number: float
+    singular_values: np.ndarray
+    vectors: np.ndarray
+
+
+def conditioning(X, weights=None) -> Conditioning:
+    """:class:`Conditioning` of ``sqrt(w) X`` (NumPy; the SVD of the p x p R of a QR)."""
+    X = np.asarray(X, dtype=float)
+    w = np.ones(X.shape[0]) if weights is None else np.asarray(weights, dtype=float)
+    if not (np.all(np.isfinite(X)) and np.all(np.isfinite(w))):
+        from ..errors import NonFiniteError
+
+        raise NonFiniteError("the design matrix or its weights hold NaN or infinity",
+                             column="design", fix="check the covariates of the fit")
+    R = np.linalg.qr(X * np.sqrt(w)[:, None], mode="r")
+    _, s, vt = np.linalg.svd(R)
+    return Conditioning(float(s[0] / s[-1]) if s[-1] > 0 else float("inf"), s, vt)
+
+
+def conditioning_from_covariance(cov, sigma2) -> Conditioning:
+    """:class:`Conditioning` from ``Cov = s^2 (X^T W X)^-1`` (a fleet fit keeps no design).
+
+    The eigenvalues of ``Cov / s^2`` are ``1 / s_i^2``; with the pseudo-inverse of a rank
+    deficient design, the null directions have eigenvalue 0 (singular value 0). Agrees with
+    :func:`conditioning` to ~1e-12 relative for a well-conditioned design.
+    """
+    cov = np.asarray(cov, dtype=float)
+    s2 = float(sigma2)
+    if not (np.isfinite(s2) and s2 > 0 and np.all(np.isfinite(cov))):
+        p = cov.shape[0]
+        return Conditioning(float("inf"), np.full(p, np.nan), np.eye(p))
+    lam, vec = np.linalg.eigh((cov + cov.T) / (2.0 * s2))  # ascending: largest s first
+    null = lam <= 1e-14 * lam[-1]
+    s = np.where(null, 0.0, 1.0 / np.sqrt(np.where(null, 1.0, lam)))
+    order = np.argsort(-s, kind="stable")
+    s, vt = s[order], vec.T[order]
+    return Conditioning(float(s[0] / s[-1]) if s[-1] > 0 else float("inf"), s, vt)
+
+
+def identifiability(basis, lo, hi, cond: Conditioning, *,
+                    condition_limit: float = CONDITION_LIMIT) -> dict:
+    """Whether the coefficients of a polynomial ``basis`` are identified by the fit data.
+
+    Not identified when a covariate does not vary over the data (``lo``/``hi``: its range;
+    its terms are then collinear with the intercept: e.g. dT/dt on a single linear ramp),
+    or when the condition number of the centred, scaled design exceeds ``condition_limit``;
+    the near-null right singular vectors say which terms are collinear and how.
+    Returns a JSON-able dict: ``identifiable``, ``condition_number``, ``condition_limit``,
+    ``constant_covariates``, ``collinear_terms``, ``relation``, ``reason``.
+    """
+    labels = basis.labels()
+    names = list(basis.names)
+    kappa = float(cond.condition_number)
+    collinear: list[str] = []
+    reasons: list[str] = []
+
+    def add(terms):
+        collinear.extend(t for t in terms if t not in collinear)
+
+    constant = []
+    for c, (a, b) in enumerate(zip(np.asarray(lo, float), np.asarray(hi, float))):
+        if b - a <= CONSTANT_RTOL * max(1.0, abs(a), abs(b)):
+            constant.append(names[c])
+            terms = [labels[k] for k, e in enumerate(basis.terms) if e[c] > 0]
+            add(["1", *terms] if (0,) * len(names) in basis.terms else terms)
+            reasons.append(f"covariate '{names[c]}' does not vary in the fit data "
+                           f"({a:.9g} ... {b:.9g}, spread {b - a:.2g}), so its terms {', '.join(terms)} are "
+                           "collinear with the intercept '1'")
+    relation = ""
+    if not kappa <= condition_limit:  # also inf / nan
+        s = np.asarray(cond.singular_values, float)
+        weak = [i for i in range(s.size) if not s[i] * condition_limit >= s[0]] or [s.size - 1]
+        tied: list[str] = []
+        for i in weak:
+            v = np.asarray(cond.vectors[i], float)
+            v = v * np.sign(v[np.argmax(np.abs(v))])  # sign: largest component positive
+            big = [k for k in np.argsort(-np.abs(v), kind="stable") if abs(v[k]) >= 0.1]
+            tied.extend(labels[k] for k in big if labels[k] not in tied)
+            if not relation:
+                relation = " ".join(f"{v[k]:+.3g}*[{labels[k]}]" for k in big) + " ~ 0"
+        add(tied)
+        reasons.append(f"the centred, scaled design has condition number {kappa:.3g} > "
+                       f"{condition_limit:g}: {relation} (near-null singular vector), so the "
+                       f"terms {', '.join(tied)} cannot be told apart")
+    return {"identifiable": not reasons, "condition_number": kappa,
+            "condition_limit": float(condition_limit), "constant_covariates": constant,
+            "collinear_terms": collinear, "relation": relation, "reason": "; ".join(reasons)}
+
+
 def lstsq_gram(X: Array, y: Array, weights: Array | None = None, *,
                rcond: float = 1e-10) -> FitResult:
     """Weighted least squares by the normal equations (Cholesky of ``G = X^T W X``).

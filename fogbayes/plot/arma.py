@@ -68,7 +68,8 @@ def analysis_figure(analysis):
                             color=COLORS["band"], alpha=0.15, lw=0)
             ax.axhline(0.0, color="k", lw=0.6)
             ax.set_title(f"{name} of the detrended series")
-            ax.set_xlabel("lag")
+            ax.set_xlabel("lag [samples]")
+            ax.set_ylabel("partial autocorrelation" if name == "PACF" else "autocorrelation")
         b1, b2 = bottom.subplots(2, 1, sharex=True)
         n = min(analysis.x.size, 1000)
         t0 = analysis.time[:n] - analysis.time[0]
@@ -81,11 +82,11 @@ def analysis_figure(analysis):
         b1.set_title(f"selected {doc['selected']} ({doc['criterion'].upper()}); Ljung-Box "
                      f"p = {w['ljung_box_p']:.3g}, rho_a2 = {w['rho_a2']:.3g}, "
                      f"rho_ax3 = {w['rho_ax3']:.3g}")
-        b1.set_ylabel(doc["unit"])
+        b1.set_ylabel(f"rate [{doc['unit']}]")
         b1.legend(**LEGEND_RIGHT)
         b2.plot(t0, analysis.denoised.noise[:n], color=COLORS["data"], lw=0.6,
                 label="removed noise")
-        b2.set_ylabel(doc["unit"])
+        b2.set_ylabel(f"removed noise [{doc['unit']}]")
         b2.set_xlabel("time from start (s)")
         b2.legend(**LEGEND_RIGHT)
     return fig

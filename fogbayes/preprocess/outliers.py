@@ -59,7 +59,7 @@ def _check_n_sigma(n_sigma: float) -> float:
 
 def pauta_flags(x, *, n_sigma: float = 3.0, max_iter: int = 100, t=None,
                 detrend_order: int | None = None,
-                smooth_window: int | None = None) -> OutlierFlags:
+                smooth_window: int | None = None, mask=None) -> OutlierFlags:
     """Iterated n-sigma (Pauta) rule on residuals (paper 004).
 
     Each pass: ``r`` = residual of the samples not yet flagged (``x``, or ``x`` minus a
@@ -74,6 +74,9 @@ def pauta_flags(x, *, n_sigma: float = 3.0, max_iter: int = 100, t=None,
         t: time stamps for ``detrend_order`` (default: the sample index).
         detrend_order: remove a polynomial trend of this order in time first.
         smooth_window: remove a running median over this many samples (odd) first.
+        mask: bool (n,), samples flagged beforehand (e.g. :func:`gross_error_flags`): left
+            out of every statistic and flagged in the result; their values are not used
+            (they may be NaN or infinite).
 
     Example:
         >>> import numpy as np
@@ -82,6 +85,16 @@ def pauta_flags(x, *, n_sigma: float = 3.0, max_iter: int = 100, t=None,
         >>> bool(f.mask[500]), f.method
         (True, 'pauta')
     """
+    pre = None
+    if mask is not None:
+        pre = np.asarray(mask, dtype=bool)
+        xa = np.asarray(x, dtype=float)
+        if pre.shape != xa.shape:
+            raise ArgumentError(f"mask has shape {pre.shape} but x has {xa.shape}",
+                                column="mask", fix="pass one flag per sample")
+        if pre.any():  # stand-ins, never used in a statistic (keeps as_1d's checks)
+            fill = np.median(xa[~pre]) if (~pre).any() else 0.0
+            x = np.where(pre, fill, xa)
     x = as_1d(x, "x")
     n_sigma = _check_n_sigma(n_sigma)
     max_iter = check_positive_int(max_iter, "max_iter")
@@ -97,20 +110,76 @@ def pauta_flags(x, *, n_sigma: float = 3.0, max_iter: int = 100, t=None,
     if smooth_window is not None:
         w = _odd_window(smooth_window, x.size, "smooth_window")
         base = x - median_filter(x, size=w, mode="nearest")
-    flagged = np.zeros(x.size, bool)
+    flagged = np.zeros(x.size, bool) if pre is None else pre.copy()
     threshold, it = np.inf, 0
     for it in range(1, max_iter + 1):
         keep = ~flagged
         if keep.sum() < 3:
             break
         r = base if detrend_order is None else detrend(x, t, detrend_order, mask=flagged).residual
-        m = r[keep].mean()
-        threshold = n_sigma * r[keep].std(ddof=1)
+        m, sd = _mean_std(r[keep])
+        threshold = n_sigma * sd
         new = keep & (np.abs(r - m) > threshold)
         if not new.any():
             break
         flagged |= new
     return OutlierFlags(flagged, int(flagged.sum()), float(threshold), it, "pauta")
+
+
+def _mean_std(r: np.ndarray) -> tuple[float, float]:
+    """Mean and sample standard deviation (n - 1), without overflow: values near the
+    float64 limit (a 1e308 cell) would make the sum of squares infinite and hide them."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        m, sd = r.mean(), r.std(ddof=1)
+    if np.isfinite(m) and np.isfinite(sd):
+        return m, sd
+    k = float(np.max(np.abs(r)))
+    u = r / k
+    return k * u.mean(), k * u.std(ddof=1)
+
+
+#: Robust sigmas beyond which a value is a gross error (see :func:`gross_error_flags`).
+GROSS_SIGMAS = 1e3
+
+
+def gross_error_flags(x, *, n_sigma: float = GROSS_SIGMAS,
+                      limit: float | None = None) -> OutlierFlags:
+    """Gross errors: values no statistic should see (a 1e308 cell, NaN, infinity).
+
+    Flags ``x_i`` when it is not finite, when ``|x_i| > limit`` (a non-physical magnitude,
+    e.g. 1e9 deg/h for a gyro rate), or when ``|x_i - median| > n_sigma * s`` with the
+    robust scale ``s = max(1.4826 MAD, (q95 - q05) / 3.29)`` of the finite values (both
+    equal sigma for Gaussian data; the 90 % range keeps ``s`` honest when more than half
+    of the values are equal, e.g. quantised outputs, and grows with any real drift, so
+    that only values ~1e3 times further out than the data's own spread are flagged; when
+    ``s`` is 0 only the first two rules apply). Unlike :func:`pauta_flags`, the input may
+    hold NaN and infinity. Use it before a least-squares fit or a 3-sigma rule (pass the
+    mask on as ``pauta_flags(..., mask=)``): one 1e308 cell makes the variance infinite
+    and ruins both.
+    """
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 1:
+        raise ArgumentError(f"x must be one-dimensional, got shape {a.shape}", column="x",
+                            fix="pass a single column")
+    n_sigma = _check_n_sigma(n_sigma)
+    mask = ~np.isfinite(a)
+    if limit is not None:
+        with np.errstate(invalid="ignore"):
+            mask |= np.abs(a) > float(limit)
+    threshold = np.inf
+    ok = ~mask
+    if ok.sum() >= 3:
+        v = a[ok]
+        med = np.median(v)
+        with np.errstate(over="ignore"):
+            dev = np.abs(v - med)
+        q05, q95 = np.quantile(v, [0.05, 0.95])
+        with np.errstate(over="ignore", invalid="ignore"):
+            s = max(MAD_TO_SIGMA * float(np.median(dev)), float(q95 - q05) / 3.289707253902945)
+        if np.isfinite(s) and s > 0:
+            threshold = n_sigma * s
+            mask[ok] = dev > threshold
+    return OutlierFlags(mask, int(mask.sum()), float(threshold), 1, "gross")
 
 
 def _odd_window(window: int, n: int, name: str) -> int:

@@ -10,10 +10,13 @@ from __future__ import annotations
 import base64
 import html
 import io
+import math
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any, Sequence
+
+import numpy as np
 
 _CSS = """
 body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;margin:2em auto;
@@ -21,11 +24,21 @@ max-width:1100px;color:#1d232a;line-height:1.45;padding:0 1em}
 h1{border-bottom:3px solid #2b5d8a;padding-bottom:.3em}h2{color:#2b5d8a;margin-top:1.8em}
 table{border-collapse:collapse;margin:.8em 0;font-size:.92em}
 th,td{border:1px solid #c9d3dc;padding:.3em .6em;text-align:right}
-th{background:#eef3f7}td:first-child,th:first-child{text-align:left}
+th{background:#eef3f7}td:first-child,th:first-child{text-align:left}td:first-child{white-space:nowrap}
 figure{margin:1em 0}figure img{max-width:100%;border:1px solid #dde3e8}
 figcaption{font-size:.9em;color:#555}.warn{background:#fff3cd;border-left:4px solid #e0a800;
 padding:.5em 1em}.ok{background:#e8f5e9;border-left:4px solid #2e7d32;padding:.5em 1em}
 .meta{color:#666;font-size:.9em}code{background:#f3f5f7;padding:0 .25em}
+.headline{background:#f4f8fb;border:1px solid #c9d3dc;border-left:6px solid #2b5d8a;
+padding:.4em 1.2em 1em;margin:1em 0 1.5em}.headline h2{margin-top:.5em}
+.headline .what{font-size:1.02em;margin:.3em 0}.headline table{font-size:1em}
+.headline .bs{font-weight:600;font-size:1.15em}.ci{color:#555;font-size:.85em;white-space:nowrap}
+.verdict{font-size:1.08em;margin:.6em 0 .2em}.verdict.good{color:#1e6b2a}.verdict.caution{color:#8a5a00}
+.headline-table td:nth-child(3){border:none;text-align:center;color:#555}
+.footnote{font-size:.82em;color:#555;margin:.3em 0}
+details{margin:.8em 0;border:1px solid #dde3e8;padding:.3em .8em;background:#fafbfc}
+details summary{cursor:pointer;color:#2b5d8a;font-weight:600}
+th[title],td[title]{text-decoration:underline dotted #99a}
 """
 
 
@@ -36,9 +49,25 @@ class Section:
     title: str
     blocks: list[str] = field(default_factory=list)
     anchor: str | None = None
+    lead: bool = False  # the headline: rendered first, above the table of contents
 
     def text(self, s: str) -> "Section":
         self.blocks.append(f"<p>{html.escape(s)}</p>")
+        return self
+
+    def html(self, s: str) -> "Section":
+        """A block of HTML built by fogbayes itself (user text must be escaped by the caller)."""
+        self.blocks.append(s)
+        return self
+
+    def footnote(self, s: str) -> "Section":
+        self.blocks.append(f'<p class="footnote">{html.escape(s)}</p>')
+        return self
+
+    def details(self, summary: str, *paragraphs: str) -> "Section":
+        """A collapsed ``<details>`` block: method text a reader opens when they want it."""
+        body = "".join(f"<p>{html.escape(p)}</p>" for p in paragraphs)
+        self.blocks.append(f"<details><summary>{html.escape(summary)}</summary>{body}</details>")
         return self
 
     def note(self, s: str, *, ok: bool = True) -> "Section":
@@ -54,24 +83,91 @@ class Section:
         return self
 
 
-def fmt(v: Any) -> str:
-    """Numbers with 4 significant digits; everything else as text."""
+SIG = 4  # significant figures of every number a report shows
+
+
+def fmt(v: Any, *, sig: int = SIG, floor: float | None = None) -> str:
+    """The one number format of the reports: ``sig`` significant figures, no exponent noise.
+
+    * ``None``/NaN -> "—", booleans -> yes/no, integers as they are, text as it is;
+    * ``floor``: the numerical noise of the quantity (e.g. 1e-9 of the rate's scale for a
+      bias removed by a least-squares fit): a value smaller in magnitude is shown as
+      ``< floor`` (one significant figure), not as ``2.656e-13``;
+    * plain decimals between 1e-4 and 1e6 (``0.0002478``, ``3585``, trailing zeros
+      dropped as ``%g`` does), ASCII minus (copies into a spreadsheet); scientific notation
+      (``3.026×10⁻⁶``) only outside that range.
+    """
     if isinstance(v, bool) or v is None:
         return "—" if v is None else ("yes" if v else "no")
-    if isinstance(v, (int,)):
-        return str(v)
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
     try:
         f = float(v)
     except (TypeError, ValueError):
         return str(v)
     if f != f:
         return "—"
-    return f"{f:.4g}"
+    if f in (float("inf"), float("-inf")):
+        return "inf" if f > 0 else "-inf"
+    if floor is not None and abs(f) < floor:
+        return f"< {_sci(floor, 1)}"
+    if f == 0.0:
+        return "0"
+    r = float(f"{f:.{sig}g}")  # rounded to sig figures first (0.99996 -> 1.000)
+    if 1e-4 <= abs(r) < 1e6:
+        decimals = max(0, sig - 1 - int(math.floor(math.log10(abs(r)))))
+        s = f"{r:.{decimals}f}"
+        if "." in s:
+            s = s.rstrip("0").rstrip(".")  # as %g: 0.3, not 0.3000
+        return s
+    return _sci(f, sig)
 
 
-def table_html(header: Sequence[str], rows: Sequence[Sequence[Any]], *, caption: str = "") -> str:
-    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(fmt(c))}</td>" for c in r) + "</tr>" for r in rows)
+def _sci(f: float, sig: int) -> str:
+    a = abs(f)
+    if 1e-4 <= a < 1e6:
+        return f"{f:.{sig}g}"
+    m, e = f"{f:.{sig - 1}e}".split("e")
+    sup = str(int(e)).translate(str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹"))
+    return f"{m}×10{sup}"
+
+
+def fmt_pct(v: Any, *, decimals: int = 1) -> str:
+    """A percentage with ``decimals`` decimals (``68.5 %``; ``0.0 %``, never ``0.0001156 %``)."""
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return "—"
+    if f != f:
+        return "—"
+    s = f"{f:.{decimals}f}"
+    return f"{'0.' + '0' * decimals if float(s) == 0.0 else s} %"
+
+
+@dataclass(frozen=True)
+class Cell:
+    """A table cell with a text already formatted, an optional tooltip (e.g. the raw key)."""
+
+    text: str
+    title: str = ""
+    cls: str = ""
+
+    def html(self, tag: str = "td") -> str:
+        attrs = (f' title="{html.escape(self.title)}"' if self.title else "") + \
+                (f' class="{html.escape(self.cls)}"' if self.cls else "")
+        return f"<{tag}{attrs}>{html.escape(self.text)}</{tag}>"
+
+
+def _cell(c: Any, tag: str = "td") -> str:
+    if isinstance(c, Cell):
+        return c.html(tag)
+    return f"<{tag}>{html.escape(fmt(c))}</{tag}>"
+
+
+def table_html(header: Sequence[Any], rows: Sequence[Sequence[Any]], *, caption: str = "") -> str:
+    """A table; cells are numbers (formatted by :func:`fmt`), text or :class:`Cell`."""
+    head = "".join(_cell(h if isinstance(h, Cell) else Cell(str(h)), "th") for h in header)
+    body = "".join("<tr>" + "".join(_cell(c) for c in r) + "</tr>" for r in rows)
     cap = f"<caption>{html.escape(caption)}</caption>" if caption else ""
     return f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
@@ -93,18 +189,26 @@ def render(title: str, sections: Sequence[Section], *, subtitle: str = "") -> st
     from .. import __version__
 
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    toc = "".join(f'<li><a href="#s{i}">{html.escape(s.title)}</a></li>' for i, s in enumerate(sections))
-    body = "".join(f'<section id="s{i}"><h2>{html.escape(s.title)}</h2>{"".join(s.blocks)}</section>'
-                   for i, s in enumerate(sections))
+    ids = [html.escape(s.anchor or ("headline" if s.lead else f"s{i}"), quote=True)
+           for i, s in enumerate(sections)]
+
+    def sec(i, s):
+        cls = ' class="headline"' if s.lead else ""
+        return f'<section id="{ids[i]}"{cls}><h2>{html.escape(s.title)}</h2>{"".join(s.blocks)}</section>'
+
+    lead = "".join(sec(i, s) for i, s in enumerate(sections) if s.lead)
+    toc = "".join(f'<li><a href="#{ids[i]}">{html.escape(s.title)}</a></li>'
+                  for i, s in enumerate(sections) if not s.lead)
+    body = "".join(sec(i, s) for i, s in enumerate(sections) if not s.lead)
     sub = f"<p>{html.escape(subtitle)}</p>" if subtitle else ""
     return (f"<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{html.escape(title)}</title><style>{_CSS}</style></head><body>"
             f"<h1>{html.escape(title)}</h1>{sub}<p class=\"meta\">fogbayes {__version__} · {stamp}</p>"
-            f"<nav><ol>{toc}</ol></nav>{body}</body></html>")
+            f"{lead}<nav><ol>{toc}</ol></nav>{body}</body></html>")
 
 
 def write(path: str | Path, title: str, sections: Sequence[Section], *, subtitle: str = "") -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(render(title, sections, subtitle=subtitle), encoding="utf-8")
-    return path
+    """Render and write the report to ``path`` atomically (the old file or the new one)."""
+    from ..data.atomic import write_text
+
+    return write_text(Path(path), render(title, sections, subtitle=subtitle))

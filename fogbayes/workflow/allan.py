@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import __version__
+from ..data.documents import FIT_SCHEMA
 from ..errors import FogbayesError
 from ..inference.allan_data import prepare
 from ..inference.allan_fit import AllanFit, fit_paper_lsq, fit_range
@@ -165,7 +166,8 @@ def fit_recording(rec, *, model: str = "allan", orders: str | None = None, bayes
                     "rule": "shortest octave taus left out while the GLS goodness of fit has "
                             "p < 1e-3 (sensor filtering), at most a third of them"}
     params = {t: (fit["terms"][t]["value"] if t in fit["terms"] else 0.0) for t in TERMS}
-    return {"model": "allan", "fogbayes_version": __version__, "sensor_id": rec.meta.sensor_id,
+    return {"schema": FIT_SCHEMA, "model": "allan", "fogbayes_version": __version__,
+            "sensor_id": rec.meta.sensor_id,
             "source": rec.meta.source, "n": int(y.size), "fs": fs, "unit": "deg/h",
             "input_unit": rec.unit, "ci": CI, "taus": options.get("taus", "octave"),
             "gaps": {"missing_samples": missing, "note": dev.note},

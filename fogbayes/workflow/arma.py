@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..data import Recording
+from ..data.documents import FIT_SCHEMA
 from ..errors import ArgumentError, TimeOrderError
 from ..inference.arma_select import PAPER_CANDIDATES, grid_candidates, order_name, select_order
 from ..models.arma import SIGN_CONVENTION
@@ -111,7 +112,7 @@ def analyse_recording(rec: Recording, *, decimate: int = 1, detrend_order: int =
     den = denoise(phi, theta, s2, x)
     ac, pac = acf(x, nlags), pacf(x, nlags)
     doc = {
-        "model": "arma", "sign_convention": SIGN_CONVENTION,
+        "schema": FIT_SCHEMA, "model": "arma", "sign_convention": SIGN_CONVENTION,
         "statsmodels_equivalent": "ARIMA(order=(p, 0, q), trend='n'): ar = phi, ma = -theta",
         "unit": rec.unit, "n": int(x.size), "decimate": int(decimate),
         "sample_rate_hz": float(rec.sample_rate / int(decimate)), "detrend_order": int(detrend_order),

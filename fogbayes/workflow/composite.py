@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..composite_cells import operating_time, rate_data
+from ..data.documents import FIT_SCHEMA, validate_in_memory
 from ..composite_tables import before_after, format_table, nominal_rate
 from ..compensate_composite import Compensator, build_compensator, compensate_draws
 from ..errors import FogbayesError, MissingColumnError, UnitError
@@ -136,7 +137,8 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
     raw, sd, lo, hi = _interval(theta, cov, want, sc,
                                 np.asarray(noise_doc.get("z90", 1.6448536269514722)))
     doc = {
-        "model": "composite", "fogbayes_version": fogbayes.__version__, "method": method,
+        "schema": FIT_SCHEMA, "model": "composite", "fogbayes_version": fogbayes.__version__,
+        "method": method,
         "input": {"unit": rec.unit, "scale_factor": rec.scale_factor},
         "operating_time": operating_time, "T_nominal": float(T_nominal),
         "orders": {"s1": want.s1, "s2": want.s2, "u0": want.u0, "u1": want.u1,
@@ -241,6 +243,7 @@ def _inputs(rec, fit: dict):
 
 def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
     """Estimated input rate (deg/s) of every row; ``outlier`` where it is not invertible."""
+    validate_in_memory(fit)
     U, T, t = _inputs(rec, fit)
     res = compensator_from_fit(fit)(U, T, t)
     return {"time": np.asarray(rec.time), "rate": np.asarray(res.rate),

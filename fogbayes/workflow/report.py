@@ -1,8 +1,14 @@
 """Compute what a calibration report shows, then hand it to the renderer.
 
 ``build_report`` is the one place that decides which analyses a report needs: it fits
-(or takes a fit document), compensates, runs the Allan analysis on what is left and
-collects the covariates for the residual plots. ``fogbayes.report`` only renders.
+(or takes a fit document), compensates, runs the Allan analysis on what is left,
+collects the covariates for the residual plots, tells the n-sigma flags that are gross
+errors from the noise's own tail (:func:`gross_errors`) and computes the headline's
+bias-stability intervals (:mod:`fogbayes.report.bootstrap`). ``fogbayes.report`` renders.
+
+Every report opens with the headline (:mod:`fogbayes.report.headline`): what was
+calibrated, the model, bias stability before -> after with 90 % block-bootstrap
+intervals, the improvement with its interval, and a verdict.
 """
 
 from __future__ import annotations
@@ -48,27 +54,33 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
 
     if fit is None and model is not None:
         fit = workflow_for(model).fit_recording(rec, model=model, bayes=bayes, seed=seed)
-    parts, outliers, residual_rec = [], None, rec
+    parts, outliers, gross, residual_rec = [], None, None, rec
     det = fit if fit is not None and fit.get("model") not in ("allan", "arma") else None
+    residual = None
     if det is not None:
         cols = workflow_for(det["model"]).compensate_recording(rec, det)
         outliers = np.asarray(cols["outlier"], bool)
         if "rate" in cols:  # composite: the estimate of the input rate, deg/s
-            if rec.input_rate is None:
-                residual = None
-            else:
+            if rec.input_rate is not None:
                 residual = (np.asarray(cols["rate"]) - rec.input_rate) * 3600.0
         else:
             residual = rec.replace(output=cols["output"]).rate("deg/h")
         if residual is not None:
             residual_rec = rec.replace(output=residual, unit="deg/h", scale_factor=None)
-    parts.append(S.recording_section(rec, outliers=outliers))
+            gross = gross_errors(residual, outliers)
+    n_sigma = float((det or {}).get("processing", {}).get("n_sigma", 3.0))
+    intervals = {}
+    if det is not None and "metrics" in det and residual is not None:
+        intervals = _intervals(rec, residual, det)
+    parts.append(_headline(rec, det, fit, loop, intervals, residual_rec, seed))
+    parts.append(S.recording_section(rec, outliers=outliers, gross=gross, n_sigma=n_sigma))
     if det is not None:
         parts.append(S.model_section(det))
         if residual_rec is not rec:
-            parts.append(S.residual_section(rec, residual_rec.output, covariates(rec)))
+            parts.append(S.residual_section(rec, residual_rec.output, covariates(rec),
+                                            model=det.get("model")))
         if "metrics" in det:
-            parts.append(S.stability_section(det))
+            parts.append(S.stability_section(det, intervals))
         table = S.composite_table_section(det)
         if table is not None:
             parts.append(table)
@@ -93,6 +105,105 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
     return write(out, title, parts, subtitle=f"source: {rec.meta.source or 'in memory'}")
 
 
+GROSS_SIGMA = 5.0  # a Gaussian sample lies beyond 5 sigma once in 1.7 million
+
+
+def gross_errors(residual: np.ndarray, flagged: np.ndarray, k: float = GROSS_SIGMA) -> np.ndarray:
+    """The flagged samples that are gross errors: beyond ``k`` robust sigma of the residual.
+
+    The n-sigma rule (3 sigma) also flags the noise's own tail, 0.27 % of a Gaussian record;
+    only samples beyond ``k`` robust sigma (1.4826 MAD around the median) are errors worth
+    pointing at.
+    """
+    r = np.asarray(residual, float)
+    ok = np.isfinite(r)
+    if not ok.any():
+        return np.asarray(flagged, bool)
+    med = np.median(r[ok])
+    sigma = 1.4826 * np.median(np.abs(r[ok] - med))
+    far = ~ok | (np.abs(r - med) > k * sigma) if sigma > 0 else ~ok
+    return np.asarray(flagged, bool) & far
+
+
+def _intervals(rec, residual, det) -> dict:
+    """Window (s) -> bootstrap StabilityInterval of the whole record, raw vs compensated."""
+    from ..report.bootstrap import stability_intervals
+
+    out = {}
+    for row in det["metrics"].get("full", {}).get("stability", []):
+        w = float(row["window_s"])
+        try:
+            out[w] = stability_intervals(rec.rate("deg/h"), {"after": residual}, rec.time,
+                                         window_s=w)["after"]
+        except (ValueError, FogbayesError):
+            continue  # fewer than three window means
+    return out
+
+
+def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
+    """The headline section: the model fitted, the loop, or the noise alone."""
+    from ..report.headline import headline_section, improvement_verdict, model_line
+
+    if det is not None and intervals:
+        si = intervals[min(intervals)]
+        m = det.get("model")
+        verdict, ok = improvement_verdict(si, f"Compensation with {m}")
+        notes = [] if det.get("converged", True) else [
+            "The fit did not converge: do not use these coefficients (see the model section)."]
+        return headline_section(rec, model=model_line(det),
+                                rows=[(f"raw → compensated ({m})", "", si)],
+                                verdict=verdict, ok=ok and det.get("converged", True), notes=notes)
+    if det is not None and "metrics" in det:
+        return headline_section(rec, model=model_line(det), verdict="The record is too short "
+                                "for a bias stability with an interval (fewer than three "
+                                "1 s windows).", ok=False)
+    if det is not None:  # composite: the relative rate error of the calibration table
+        return _composite_headline(rec, det)
+    if loop is not None:
+        from ..plot.loop import loop_headline
+
+        return loop_headline(loop, rec)
+    from ..report.bootstrap import single_stability
+
+    try:
+        single = single_stability(residual_rec.rate("deg/h"), residual_rec.time)
+    except (ValueError, FogbayesError):
+        single = None
+    verdict = "Noise only: no compensation model was fitted"
+    if fit is not None and fit.get("model") == "allan":
+        terms = fit.get("fit", {}).get("terms", {})
+        bits = [f"{k} = {_fmt(t.get('value'))} [{_fmt(t.get('low'))}, {_fmt(t.get('high'))}] "
+                f"{t.get('unit', '')}" for k, t in terms.items() if k in ("N", "B") and t]
+        if bits:
+            verdict += "; " + ", ".join(bits)
+    return headline_section(rec, model=model_line(fit), single=single, verdict=verdict + ".")
+
+
+def _fmt(v):
+    from ..report.html import fmt
+
+    return fmt(v)
+
+
+def _composite_headline(rec, det):
+    from ..report.headline import headline_section, model_line
+    from ..report.html import fmt
+
+    table = det.get("table")
+    verdict, ok = "", None
+    if isinstance(table, list) and table and "before_error_pct" in table[0]:
+        b = np.array([abs(r["before_error_pct"]) for r in table], float)
+        a = np.array([abs(r.get("fogbayes_error_pct", np.nan)) for r in table], float)
+        ppm = 1e4  # % -> parts per million, the unit of rate-table errors
+        verdict = (f"relative rate error over the {len(table)} table cells, before → after "
+                   f"compensation: median {fmt(ppm * np.nanmedian(b), sig=3)} → "
+                   f"{fmt(ppm * np.nanmedian(a), sig=3)} ppm, largest "
+                   f"{fmt(ppm * np.nanmax(b), sig=3)} → {fmt(ppm * np.nanmax(a), sig=3)} ppm.")
+        ok = bool(np.nanmedian(a) < np.nanmedian(b))
+    return headline_section(rec, model=model_line(det), verdict=verdict or
+                            "see the model section for the calibrated coefficients.", ok=ok)
+
+
 def print_pdf(html_path: str | Path, pdf_path: str | Path) -> Path:
     """Print the HTML report to PDF with headless Chromium (needs the chromium package)."""
     import shutil
@@ -102,8 +213,12 @@ def print_pdf(html_path: str | Path, pdf_path: str | Path) -> Path:
     if exe is None:
         raise FogbayesError("PDF output needs headless Chromium, which is not installed",
                             column="--pdf", fix="apt-get install chromium, or open the HTML and print it")
+    from ..data.atomic import atomic_path
+
     pdf_path = Path(pdf_path)
-    subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu", "--no-pdf-header-footer",
-                    f"--print-to-pdf={pdf_path}", Path(html_path).resolve().as_uri()],
-                   check=True, capture_output=True, timeout=300)
+    with atomic_path(pdf_path) as tmp:  # Chromium writes a temporary file, renamed when whole
+        subprocess.run([exe, "--headless", "--no-sandbox", "--disable-gpu",
+                        "--no-pdf-header-footer", f"--print-to-pdf={tmp.resolve()}",
+                        Path(html_path).resolve().as_uri()],
+                       check=True, capture_output=True, timeout=300)
     return pdf_path

@@ -31,14 +31,16 @@ import re
 import numpy as np
 
 from ..compensate import compensate_bias
-from ..errors import FogbayesError, TooShortError
+from ..data.documents import FIT_SCHEMA, validate_in_memory
+from ..errors import FogbayesError, NonFiniteError, TooShortError
 from ..export import basis_from_dict, coefficient_document
 from ..inference.compare import rms_criterion, select_order
-from ..inference.lsq import lstsq
+from ..inference.lsq import conditioning, identifiability, lstsq
 from ..metrics import DEFAULT_WINDOWS, segment_report
 from ..models.polynomial import design
 from ..models.thermal import OrderError, ThermalSpec, check_spec, thermal_basis
 from ..preprocess import pauta_flags, segment_thermal
+from ..preprocess.outliers import gross_error_flags
 from ..units import convert_rate
 from ._thermal_bayes import posterior_document
 from ._thermal_data import Processing, fit_blocks, make_processing, sample_covariates
@@ -50,6 +52,8 @@ _SPEC_KEYS = ("cross", "extra", "gradient", "extra_order", "temperature")
 _BAYES_KEYS = ("noise", "ar_order", "ma_order", "num_warmup", "num_samples", "num_chains",
                "level", "bayes_average_s")
 _OTHER_KEYS = ("processing", "windows", "order_criterion")
+#: |rate| above this (deg/h; ~770 revolutions/s) is no gyro reading: a gross error.
+RATE_LIMIT_DEG_H = 1e9
 
 
 def _range(text: str, model: str) -> list[int]:
@@ -97,6 +101,9 @@ def model_spec(model: str, t_order: int, rate_order: int, opts: dict) -> Thermal
 
 def _lsq(spec: ThermalSpec, blocks):
     basis = thermal_basis(spec, blocks.z)
+    if not (np.all(np.isfinite(blocks.y)) and np.all(np.isfinite(blocks.z))):
+        raise NonFiniteError("the block means of the fit hold NaN or infinity", column="output",
+                             fix="repair the non-finite samples or covariates first")
     if blocks.y.size < basis.n_terms + 2:
         raise TooShortError(f"{blocks.y.size} block means cannot fit {basis.n_terms} "
                             f"coefficients", column="output",
@@ -176,21 +183,41 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
                            **{k: options[k] for k in Processing._fields[1:] if k in options})
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     rate = rec.rate("deg/h")
+    # gross errors (non-finite after the unit conversion, |rate| > 1e9 deg/h, > 1e3 robust
+    # sigmas from the median) are flagged first and never reach a sum: one 1e308 cell would
+    # make the least-squares variance and the 3-sigma rule's sigma infinite
+    gross = gross_error_flags(rate, limit=RATE_LIMIT_DEG_H)
+    if gross.count > rate.size // 2:
+        raise NonFiniteError(f"{gross.count} of {rate.size} samples are non-finite or absurd "
+                             f"(|rate| > {RATE_LIMIT_DEG_H:g} deg/h or far off the median)",
+                             file=rec.meta.source, column="output",
+                             fix="check the output unit (--output-unit) and the file")
+    pre = gross.mask if gross.count else None
+    if gross.count:
+        rate = np.where(gross.mask, np.median(rate[~gross.mask]), rate)  # stand-ins, masked
     specs = [model_spec(model, t, r, options) for t, r in parse_orders(model, orders)]
     z = sample_covariates(rec, specs[0], proc)  # the same covariates for every order
-    blocks = fit_blocks(rec, rate, z, specs[0], proc, None)
+    if not np.all(np.isfinite(z)):
+        raise NonFiniteError("the covariates (temperature, dT/dt) hold NaN or infinity",
+                             file=rec.meta.source, column="temperature",
+                             fix="repair the temperature channels")
+    blocks = fit_blocks(rec, rate, z, specs[0], proc, pre)
 
     bayes_opts = {k: options[k] for k in _BAYES_KEYS if k in options}
     spec, selection = _choose_order(specs, blocks, proc, options.get("order_criterion", "rms"),
                                     seed, bayes_opts)
     fit, basis = _lsq(spec, blocks)
-    flags = None
+    flags = gross if gross.count else None
     if proc.outliers == "pauta":
-        flags = pauta_flags(rate - _bias(basis, fit.params, z), n_sigma=proc.n_sigma)
-        if flags.count:
+        flags = pauta_flags(rate - _bias(basis, fit.params, z), n_sigma=proc.n_sigma, mask=pre)
+        if flags.count > gross.count:
             blocks = fit_blocks(rec, rate, z, spec, proc, flags.mask)
             fit, basis = _lsq(spec, blocks)
     coef = np.asarray(fit.params)
+    if not (np.all(np.isfinite(coef)) and np.all(np.isfinite(np.asarray(fit.covariance)))):
+        raise NonFiniteError("the least-squares fit gave non-finite coefficients or covariance",
+                             file=rec.meta.source, column="output",
+                             fix="check the recording for absurd values and the model order")
     lo, hi = blocks.z.min(axis=0), blocks.z.max(axis=0)
     valid = {name: (float(a), float(b)) for name, a, b in zip(basis.names, lo, hi)}
     after = compensate_bias(coef, clamp_covariates(z, basis, valid), rate, basis)  # as compensation does
@@ -199,9 +226,18 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
     if not bool(fit.converged):
         warnings.append("the design is rank deficient: some covariate does not vary enough "
                         "(e.g. dT/dt in a record without ramps); coefficients are not identified")
+    ident = identifiability(basis, lo, hi, conditioning(design(blocks.z, basis),
+                                                        blocks.count.astype(float)))
+    if not ident["identifiable"]:
+        warnings.append(f"not identifiable: {ident['reason']}; the coefficients are meaningless")
+    if gross.count:
+        off = f" or > {gross.threshold:.3g} deg/h off the median" if np.isfinite(gross.threshold) else ""
+        warnings.append(f"{gross.count} sample(s) with non-finite or absurd values (|rate| > "
+                        f"{RATE_LIMIT_DEG_H:g} deg/h{off}) were flagged as outliers, left out "
+                        "of the fit and replaced by the median in the metrics")
     doc = {
-        "model": model, "fogbayes_version": fogbayes.__version__,
-        "converged": bool(fit.converged), "warnings": warnings,
+        "schema": FIT_SCHEMA, "model": model, "fogbayes_version": fogbayes.__version__,
+        "converged": bool(fit.converged) and ident["identifiable"], "warnings": warnings,
         "input": {"source": rec.meta.source, "sensor_id": rec.meta.sensor_id, "unit": rec.unit,
                   "scale_factor": rec.scale_factor, "n": rec.n},
         "params": {"spec": spec._asdict(), **coefficient_document(
@@ -209,6 +245,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
         "processing": proc._asdict(),
         "outliers": {"method": proc.outliers, "n_sigma": proc.n_sigma,
                      "count": 0 if flags is None else flags.count},
+        "diagnostics": {"identifiability": ident},
         "fit": {"n_blocks": int(blocks.y.size), "n_params": basis.n_terms,
                 "rms_criterion": rms_criterion(np.asarray(fit.residual), basis.n_terms),
                 "residual_std": float(np.sqrt(fit.sigma2)), "dof": int(fit.dof),
@@ -232,6 +269,7 @@ def check_fit_document(fit: dict) -> None:
         raise FogbayesError(f"not a bias-t/thermal fit document (model={fit.get('model')!r})"
                             if isinstance(fit, dict) else "the fit document is not a JSON object",
                             column="model", fix="pass the JSON written by 'fogbayes fit'")
+    validate_in_memory(fit)
 
 
 def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
@@ -246,7 +284,8 @@ def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
         z = clamp_covariates(z, basis, p["valid_range"])
     rate = rec.rate("deg/h")
     comp = compensate_bias(np.asarray(p["coef"], dtype=float), z, rate, basis)
-    flags = pauta_flags(comp, n_sigma=float(proc.n_sigma))
+    gross = gross_error_flags(comp, limit=RATE_LIMIT_DEG_H)  # e.g. a 1e308 cell
+    flags = pauta_flags(comp, n_sigma=float(proc.n_sigma), mask=gross.mask if gross.count else None)
     out = convert_rate(comp, "deg/h", rec.unit, scale_factor=rec.scale_factor)
     return {"time": np.asarray(rec.time), "output": np.asarray(out, dtype=float),
             "outlier": flags.mask.astype(bool)}
