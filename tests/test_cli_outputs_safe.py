@@ -299,3 +299,22 @@ def test_batch_killed_mid_run_leaves_no_summary_and_the_old_outputs(files, tmp_p
     assert (out / "g1.fit.json").read_bytes() == old  # killed while replacing it
     assert json.loads((out / "g0.fit.json").read_text())["model"] == "bias-t"  # complete
     assert _temps(tmp_path) == []
+
+
+@pytest.mark.parametrize("command", ["fit", "compensate", "batch"])
+def test_an_output_under_a_regular_file_is_one_line(command, tmp_path, capsys):
+    """An output path whose folder is a regular file: exit 2 and one line, no traceback."""
+    rec = save(simulate("thermal", seed=2, duration=600.0, fs=1.0).recording,
+               tmp_path / "runs" / "r.csv")
+    blocker = tmp_path / "afile"
+    blocker.write_text("not a folder\n")
+    fit = tmp_path / "f.json"
+    assert main(["-q", "fit", str(rec), "-m", "bias-t", "--json", str(fit)]) == 0
+    args = {"fit": ["fit", str(rec), "-m", "bias-t", "--json", str(blocker / "x.json")],
+            "compensate": ["compensate", str(rec), "-p", str(fit), "-o", str(blocker / "c.csv")],
+            "batch": ["batch", str(rec.parent), "-m", "bias-t", "--out", str(blocker / "out")]}
+    capsys.readouterr()
+    assert main(["-q", *args[command]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("fogbayes: error:") and "afile" in err[0], err
+    assert blocker.read_text() == "not a folder\n"

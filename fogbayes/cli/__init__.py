@@ -52,6 +52,11 @@ def main(argv: list[str] | None = None) -> int:
     except FogbayesError as exc:
         print(f"fogbayes: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # a path the user named cannot be read or written
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"fogbayes: error: {where}{exc.strerror or exc}. Fix: check the path and its "
+              "folder's permissions", file=sys.stderr)
+        return 2
     except SystemExit as exc:
         if isinstance(exc, Terminated):
             print("fogbayes: terminated (SIGTERM); unfinished outputs were not written",

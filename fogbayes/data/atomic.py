@@ -99,7 +99,10 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     if path.exists() and not path.is_file():
         yield path  # a device or a pipe: nothing to replace, nothing to protect
         return
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise unwritable(path, exc) from None
     tmp = temp_path(path)
     try:
         yield tmp
@@ -113,6 +116,15 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         _remove(tmp)
         raise
     _fsync_dir(path.parent)
+
+
+def unwritable(path: Path, exc: OSError) -> FileFormatError:
+    """The one-line error for an output path that cannot be written (under a regular file,
+    a read-only folder, ...)."""
+    blocker = next((p for p in path.parents if p.is_file()), None)
+    why = (f"'{blocker}' is a file, not a folder" if blocker is not None
+           else f"cannot write here ({exc.strerror or exc})")
+    return FileFormatError(why, file=str(path), fix="choose a path in a folder you can write to")
 
 
 @contextmanager
