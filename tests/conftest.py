@@ -7,18 +7,12 @@ every test runs with the library's own configuration, never flipping it in a tes
 from __future__ import annotations
 
 import gc
-import os
-from pathlib import Path
 
 import jax
 import pytest
 
 import fogbayes  # noqa: F401  (turns on jax_enable_x64)
-
-REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(os.environ.get("FOGBAYES_SHARED", REPO.parent / "shared"))
-MEASURED = SHARED / "data" / "measured"
-
+from _measured import MEASURED, SHARED, measured_path  # noqa: F401  (re-exported)
 
 #: Clear JAX's caches once a process holds this many memory maps: half the kernel's
 #: default ``vm.max_map_count`` (65 530), so one module's compilations cannot reach it.
@@ -50,21 +44,6 @@ def _release_compiled_code():
     if _memory_maps() > MAP_HEADROOM:
         jax.clear_caches()
         gc.collect()
-
-
-def measured_path(*parts: str) -> Path:
-    """Path of a measured data file in ../shared; skip (or fail under CI) when absent.
-
-    The ADIS16405 runs are licensed for non-commercial use only, so they are never copied
-    into this repository: tests read them from ../shared/data/measured.
-    """
-    p = MEASURED.joinpath(*parts)
-    if not p.exists():
-        msg = f"measured data not found at {p} (set FOGBAYES_SHARED to the shared/ folder)"
-        if os.environ.get("CI"):
-            pytest.fail(msg + "; CI must have ../shared beside the clone")
-        pytest.skip(msg)
-    return p
 
 
 @pytest.fixture

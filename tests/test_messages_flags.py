@@ -24,7 +24,7 @@ from fogbayes.simulate import simulate
 PACKAGE = Path(fogbayes.__file__).resolve().parent
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z0-9]*(?:-[a-z0-9]+)*")
 #: Flags of other programs that fogbayes' text mentions (pip, pytest, chromium ...).
-FOREIGN = {"--nbmake", "--headless", "--no-sandbox", "--disable-gpu", "--screenshot",
+FOREIGN = {"--nbmake", "--force-reinstall", "--headless", "--no-sandbox", "--disable-gpu", "--screenshot",
            "--window-size", "--print-to-pdf", "--no-pdf-header-footer", "--enable-logging",
            "--v", "--virtual-time-budget", "--run-all-compositor-stages-before-draw",
            "--user-data-dir", "--no-first-run", "--disable-extensions", "--dump-dom",

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import measured_path
+from _measured import measured_path
 
 from fogbayes.workflow.pan_tvac import PAN_OPTIONS, load_pan_tvac
 from fogbayes.workflow.thermal import compensate_recording, fit_recording
