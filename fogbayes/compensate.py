@@ -61,8 +61,9 @@ def bias_compensator(basis: PolyBasis) -> Compensator:
 
     single = jax.jit(one)
     if jax.default_backend() == "cpu":  # one pass at memory speed, no intermediate array
-        def single(coef, z, y, out=None):
-            return compensate_into(basis, np.asarray(coef), np.asarray(z), np.asarray(y), out)
+        def single(coef, z, y, out=None, method="auto"):
+            return compensate_into(basis, np.asarray(coef), np.asarray(z), np.asarray(y), out,
+                                   method=method)
     return Compensator(single, jax.jit(jax.vmap(one)))
 
 

@@ -29,11 +29,11 @@ def test_loop_equals_the_design_matrix_form(case):
     coef = rng.normal(0, 5, len(terms))
     y = rng.normal(0, 10, n)
     want = y - np.asarray(design(z, basis)) @ coef
-    got = compensate_into(basis, coef, z, y)
+    got = compensate_into(basis, coef, z, y, method="loop")
     # the same terms summed in another order: a few roundings of terms reaching ~10 deg/h
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-13)
     out = np.full(n + 10, np.nan)
-    back = compensate_into(basis, coef, z, y, out[5:n + 5])  # in place, into a view
+    back = compensate_into(basis, coef, z, y, out[5:n + 5], method="loop")  # in place, a view
     assert back.base is out and np.isnan(out[:5]).all() and np.isnan(out[-5:]).all()
     np.testing.assert_array_equal(out[5:n + 5], got)
     # the library's compensator is this loop on a CPU, or the XLA program elsewhere
@@ -41,7 +41,7 @@ def test_loop_equals_the_design_matrix_form(case):
     np.testing.assert_allclose(lib, want, rtol=0, atol=1e-13)
     # float32: the scaled basis keeps single precision close to float64 (~1e-6 relative)
     y32 = compensate_into(basis, coef.astype(np.float32), z.astype(np.float32),
-                          y.astype(np.float32))
+                          y.astype(np.float32), method="loop")
     assert y32.dtype == np.float32
     np.testing.assert_allclose(y32, want, rtol=0, atol=2e-4 * np.abs(want).max())
 
@@ -81,3 +81,26 @@ def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
                                    rtol=1e-12)
     finally:
         bias_compensator.cache_clear()  # later tests build the CPU compensators again
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_the_numpy_path_is_the_loops_arithmetic(case):
+    """A one-off call (no loop compiled yet, few samples) runs in NumPy, term by term in the
+    loop's order: the same numbers to a rounding, and no compilation (0.7 s) is paid."""
+    from fogbayes import compensate_loops as cl
+
+    names, terms = CASES[case]
+    rng = np.random.default_rng(7 + len(terms))
+    n = 3000
+    z = np.column_stack([rng.uniform(-40, 60, n)] + [rng.normal(0, 3, n) for _ in names[1:]])
+    basis = make_basis(names, terms, z)
+    coef, y = rng.normal(0, 5, len(terms)), rng.normal(0, 10, n)
+    loop = compensate_into(basis, coef, z, y, method="loop")
+    assert basis.terms in cl._COMPILED_TERMS
+    np.testing.assert_allclose(compensate_into(basis, coef, z, y, method="numpy"), loop,
+                               rtol=0, atol=4e-15 * np.abs(y).max())
+    fresh = basis._replace(terms=basis.terms + ((0,) * len(names),))  # never compiled
+    coef2 = np.append(coef, 0.0)
+    auto = compensate_into(fresh, coef2, z, y)
+    assert fresh.terms not in cl._COMPILED_TERMS  # "auto" did not compile it
+    np.testing.assert_allclose(auto, loop, rtol=0, atol=4e-15 * np.abs(y).max())

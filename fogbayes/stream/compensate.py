@@ -22,9 +22,12 @@ in-memory dicts: ``time`` (optional), ``output`` (``rate`` for composite), ``out
 
 from __future__ import annotations
 
+from functools import partial
+
 from pathlib import Path
 from typing import NamedTuple
 
+import jax
 import numpy as np
 
 from ..errors import FogbayesError, UnitError
@@ -123,6 +126,8 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
     coef = np.asarray(p["coef"], dtype=float)
     valid = p.get("valid_range")
     f = bias_compensator(basis).single
+    if jax.default_backend() == "cpu":  # many chunks: the compiled loop, never the one-off
+        f = partial(f, method="loop")   # NumPy path of compensate_loops
     fields = ("time", "output", "temperatures") if include_time or scan else ("output", "temperatures")
 
     def compensated():
