@@ -332,16 +332,20 @@ def read_npz(path: Path) -> Table:
     return Table(arrays, meta)
 
 
-def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, src: str) -> np.ndarray:
+def read_npy_header(fh) -> tuple[tuple[int, ...], bool, np.dtype]:
+    """(shape, fortran order, dtype) of the .npy stream ``fh``, read without the data."""
     fmt = np.lib.format
+    version = fmt.read_magic(fh)
+    if version == (1, 0):
+        return fmt.read_array_header_1_0(fh)
+    if version == (2, 0):
+        return fmt.read_array_header_2_0(fh)
+    return fmt._read_array_header(fh, version)
+
+
+def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, src: str) -> np.ndarray:
     with zf.open(info) as fh:
-        version = fmt.read_magic(fh)
-        if version == (1, 0):
-            shape, fortran, dtype = fmt.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, fortran, dtype = fmt.read_array_header_2_0(fh)
-        else:
-            shape, fortran, dtype = fmt._read_array_header(fh, version)
+        shape, fortran, dtype = read_npy_header(fh)
         if key == "__meta__":
             if dtype.kind not in "US" or shape != ():
                 raise MetadataError("the '__meta__' array is not a JSON string", file=src,

@@ -248,13 +248,18 @@ class _Checker:
         if absmax is not None and abs(val) > absmax:
             self.fail(path, f"is {val!r}; |value| above {absmax:g} is not physical")
 
+    def _list(self, obj: dict, key: str, path: str, n: int | None, what: str,
+              required: bool) -> list | None:
+        vals = self.get(obj, key, list, path=path, required=required)
+        if vals is not None and n is not None and len(vals) != n:
+            self.fail(path, f"{len(vals)} values for {n} {what}")
+        return vals
+
     def numbers(self, obj: dict, key: str, path: str, *, n: int | None = None, what="terms",
                 required=True, nullable_items=False, **bounds) -> list | None:
-        vals = self.get(obj, key, list, path=path, required=required)
+        vals = self._list(obj, key, path, n, what, required)
         if vals is None:
             return None
-        if n is not None and len(vals) != n:
-            self.fail(path, f"{len(vals)} values for {n} {what}")
         for i, x in enumerate(vals):
             if x is None and nullable_items:
                 continue
@@ -265,11 +270,9 @@ class _Checker:
 
     def strings(self, obj: dict, key: str, path: str, *, n: int | None = None, what="terms",
                 required=True) -> list | None:
-        vals = self.get(obj, key, list, path=path, required=required)
+        vals = self._list(obj, key, path, n, what, required)
         if vals is None:
             return None
-        if n is not None and len(vals) != n:
-            self.fail(path, f"{len(vals)} values for {n} {what}")
         for i, x in enumerate(vals):
             if not isinstance(x, str):
                 self.fail(f"{path}[{i}]", f"is a {_kind(x)}, not a string")

@@ -40,15 +40,10 @@ class _NpyStream:
 
 
 def _npy_header(fh, src: str, name: str) -> tuple[int, np.dtype]:
-    fmt = np.lib.format
+    from ..data._read import read_npy_header
+
     try:
-        version = fmt.read_magic(fh)
-        if version == (1, 0):
-            shape, _, dtype = fmt.read_array_header_1_0(fh)
-        elif version == (2, 0):
-            shape, _, dtype = fmt.read_array_header_2_0(fh)
-        else:
-            shape, _, dtype = fmt._read_array_header(fh, version)
+        shape, _, dtype = read_npy_header(fh)
     except (ValueError, OSError, EOFError) as exc:
         raise FileFormatError(f"cannot read a .npy header ({exc})", file=src, column=name,
                               fix="write the array with numpy.save / numpy.savez") from None
