@@ -283,6 +283,7 @@ def test_random_damage_is_a_clean_result_or_one_error_line(run, doc_paths, tmp_p
     else:
         lines = _error_lines(err)
         assert code == 2 and len(lines) == 1 and str(bad) in lines[0], (path, action, err)
+        assert not out.exists()  # a refused document leaves no output behind
 
 
 def test_fresh_documents_of_every_writer_validate(run):
