@@ -188,9 +188,21 @@ def slow(path):
         time.sleep(pause)
 atomic._fsync = slow
 signal.signal(signal.SIGINT, signal.default_int_handler)  # even if the parent ignores it
+# a signal mask is inherited through fork/exec: a test runner thread that blocks SIGTERM
+# (seen once in CI: the killed batch slept its full pause) must not pass that on
+signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
 sys.argv[0] = "fogbayes"
 runpy.run_module("fogbayes", run_name="__main__", alter_sys=True)
 """
+
+
+def _signal_state(pid: int) -> str:
+    """The Sig* lines of /proc/PID/status (pending, blocked, ignored, caught), to diagnose."""
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            return "; ".join(ln.strip() for ln in fh if ln.startswith(("Sig", "Shd")))
+    except OSError:
+        return "no /proc status"
 
 
 def _kill_while_writing(args, watch: Path, mark: str | None, sig=signal.SIGTERM,
@@ -211,7 +223,10 @@ def _kill_while_writing(args, watch: Path, mark: str | None, sig=signal.SIGTERM,
                 signalled = True
                 break
             time.sleep(0.005)
-        _, err = proc.communicate(timeout=timeout)
+        try:
+            _, err = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise AssertionError(f"no exit {timeout} s after the signal; {_signal_state(proc.pid)}")
     finally:
         if proc.poll() is None:
             proc.kill()
