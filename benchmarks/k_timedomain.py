@@ -1,7 +1,7 @@
 r"""Rate random walk K from the time-domain likelihood, with a profile-likelihood interval.
 
 A study, not a library method (``coverage_allan.py --methods ssm``): measured against the
-Allan GLS fit it is no clear gain (benchmarks/RESULTS_allan.md, section 3, fourth-session
+Allan GLS fit it is no clear gain (benchmarks/RESULTS_allan.md, section 3, 2026-11-22 (e9458e2)
 rerun): somewhat smaller error on mix A, intervals too narrow on mix B.
 
 Why: the Allan variance condenses the record into a few octaves, and K rests on the last
