@@ -11,7 +11,7 @@ float32 usable. Methods (all start from the linear guess w0 = y / S_0(T), as the
 * ``"newton"``: w <- w - g / g';
 * ``"paper"``: paper 000's fixed point w <- y / P(w), 2 iterations in the paper. It is
   linearly convergent with rate |w P'/P| (about 0.26 at 80 deg/s), so 2 steps leave about
-  1 % at +-80 deg/s (REFERENCE.md) - kept as the paper's baseline.
+  1 % at +-80 deg/s (docs/REFERENCE.md) - kept as the paper's baseline.
 
 The iteration count is fixed and small (a static argument, unrolled so that XLA fuses the
 whole per-sample computation into one elementwise loop); :func:`choose_iterations` picks

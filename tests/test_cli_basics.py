@@ -60,13 +60,6 @@ def test_help_lists_commands(capsys):
     assert "info" in out
 
 
-def test_unbuilt_command_says_so(capsys):
-    # every command of DESIGN.md is built now (the last stub, `batch`, is fogbayes/cli/batch.py)
-    assert main(["--help"]) == 0
-    out = capsys.readouterr().out
-    assert "batch" in out and "not built yet" not in out
-
-
 # ------------------------------------------------------------------ help, flags, --json -
 # Consistency of the command line (issue #8): every command documents an example, accepts
 # -q/--quiet after its name, and writes its JSON document alone on stdout with `--json -`.
@@ -75,7 +68,7 @@ COMMANDS = sorted(typer.main.get_command(app).commands)
 
 
 def test_all_design_commands_are_registered():
-    # DESIGN.md's commands plus the helpers; a lost registration would silently drop one
+    # docs/DESIGN.md's commands plus the helpers; a lost registration would silently drop one
     assert {"allan", "arma", "batch", "compensate", "demo", "fit", "info", "loop", "report",
             "simulate"} <= set(COMMANDS)
 

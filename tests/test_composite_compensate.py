@@ -1,6 +1,6 @@
 """Compensation with the composite model: the paper's tables, exact inversion, float32, vmap.
 
-Reference numbers: paper 000 Tables 1-2 (and REFERENCE.md's recomputation); truth is the
+Reference numbers: paper 000 Tables 1-2 (and docs/REFERENCE.md's recomputation); truth is the
 rate that generated noise-free outputs from the eq. 15/16/12 coefficients.
 """
 
@@ -55,7 +55,7 @@ def test_paper_two_step_scheme_leaves_about_one_percent():
     rows = _rows()
     at80 = [r for r in paper_comparison(rows, "paper") if abs(r["rate"]) == 80]
     for r in at80:
-        # REFERENCE.md: 0.96 .. 1.06 %; the paper's measured "after": 0.82 .. 1.07 %
+        # docs/REFERENCE.md: 0.96 .. 1.06 %; the paper's measured "after": 0.82 .. 1.07 %
         assert 0.9 < r["ours_pct"] < 1.1 and abs(r["difference"]) < 0.25, r
 
 

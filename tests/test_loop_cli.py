@@ -1,4 +1,4 @@
-"""``fogbayes loop``: files written to the DESIGN.md contract, bad input is exit code 2."""
+"""``fogbayes loop``: files written to the docs/DESIGN.md contract, bad input is exit code 2."""
 
 from __future__ import annotations
 

@@ -89,7 +89,7 @@ def test_paper004_bias():
 
 def test_paper000_model_against_matrix_product():
     # independent evaluation: [1 T T^2] @ M @ [1 w w^2 w^3] * w + U0 + U1 t with the
-    # REFERENCE.md coefficients typed again here
+    # docs/REFERENCE.md coefficients typed again here
     M = np.array([[3.9621e1, -5.9735e-4, -7.9343e-4, 7.1717e-8],
                   [-1.3299e-2, 7.5276e-6, 5.5587e-7, -1.1835e-9],
                   [2.5685e-5, 1.3955e-7, -9.9851e-9, -5.2857e-12]])
@@ -119,10 +119,10 @@ def test_paper000_reference_check_numbers(T):
     before = (_paper_iteration(U, T, 10.0, 0) - w) / w * 100
     after2 = (_paper_iteration(U, T, 10.0, 2) - w) / w * 100
     if T == 20.0:
-        # REFERENCE.md check: 12.8 % "before" at +-80 deg/s, 20 C (measured 12.80 / 12.76)
+        # docs/REFERENCE.md check: 12.8 % "before" at +-80 deg/s, 20 C (measured 12.80 / 12.76)
         np.testing.assert_allclose(np.abs(before), 12.8, atol=0.05)
     # the same size as the paper's table ("before" 10.6 ... 13.4 %); the 2-step scheme leaves
-    # 0.96 ... 1.06 % (REFERENCE.md check; measured 0.962 ... 1.058)
+    # 0.96 ... 1.06 % (docs/REFERENCE.md check; measured 0.962 ... 1.058)
     assert np.all((np.abs(before) > 12.7) & (np.abs(before) < 13.2))
     assert np.all((np.abs(after2) > 0.95) & (np.abs(after2) < 1.07))
     # a converged inversion recovers the rate (the model is exact): < 1e-6 %

@@ -172,7 +172,7 @@ def test_paper000_scenario_reproduces_reference_numbers():
     sel = (T == 20.0) & (np.abs(w) == 80.0)
     omega = (rec.output[sel] - fx.paper000_bias(T[sel]) - fx.paper000_drift(T[sel], t[sel])) \
         / fx.paper000_linear_scale(T[sel])
-    # REFERENCE.md: the linear scale S0 leaves 12.8 % at +-80 deg/s, 20 C
+    # docs/REFERENCE.md: the linear scale S0 leaves 12.8 % at +-80 deg/s, 20 C
     np.testing.assert_allclose(np.abs(omega - w[sel]) / 80.0 * 100, 12.8, atol=0.05)
 
 

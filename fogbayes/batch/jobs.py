@@ -8,7 +8,7 @@ files those commands would write:
                     (the document ``fogbayes fit --json`` writes, byte for byte);
 * ``compensate`` -- the fit, then ``compensate_recording`` -> also ``<stem>.compensated.csv``
                     (every input row: time, compensated output, outlier flag);
-* ``loop``       -- :func:`fogbayes.loop.run_loop` -> ``<stem>.loop.json`` (DESIGN.md
+* ``loop``       -- :func:`fogbayes.loop.run_loop` -> ``<stem>.loop.json`` (docs/DESIGN.md
                     contract) and ``<stem>.compensated.csv``, as ``fogbayes loop`` writes them;
 * ``report``     -- :func:`fogbayes.workflow.report.build_report` -> ``<stem>.html``.
 

@@ -2,7 +2,7 @@
 
 Fits the named model, traces what its residual holds to the candidate effects the model
 lacks, adds the one the evidence supports, refits, and repeats (at most ``--max-steps``).
-Writes the DESIGN.md JSON (before/after metrics, one entry per added effect with its
+Writes the docs/DESIGN.md JSON (before/after metrics, one entry per added effect with its
 evidence, and ``unexplained`` structure), the compensated CSV (every input row: ``time``,
 ``output`` in the input unit -- or ``rate`` in deg/s for ``composite`` --, ``outlier``) and,
 with ``--report``, an HTML report that tells the story step by step.

@@ -1,6 +1,6 @@
 """Load and save Recordings as CSV, Parquet or NPZ.
 
-Column contract (DESIGN.md): ``time`` (s, strictly increasing), ``output`` (gyro output in
+Column contract (docs/DESIGN.md): ``time`` (s, strictly increasing), ``output`` (gyro output in
 ``unit``), ``temperature``, ``temperature_2``, ... (deg C), optional ``input_rate`` (deg/s).
 Other names are mapped with the keyword arguments of :func:`load`.
 

@@ -1,6 +1,6 @@
 """Residuals -> findings: candidate effects, evidence under coloured noise, model-free scans.
 
-* :mod:`.candidates` -- every DESIGN.md effect name as a family of model terms;
+* :mod:`.candidates` -- every docs/DESIGN.md effect name as a family of model terms;
 * :mod:`.evidence` -- bootstrap-calibrated screening under the state-space noise model;
 * :mod:`.reml` -- restricted-likelihood noise hyperparameters for the null simulations;
 * :mod:`.compete` -- candidates that explain the same residual, ranked by a bootstrap duel;

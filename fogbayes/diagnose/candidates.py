@@ -1,4 +1,4 @@
-"""The library of candidate effects: every DESIGN.md effect name as a model term.
+"""The library of candidate effects: every docs/DESIGN.md effect name as a model term.
 
 Each candidate is a small family of :class:`~fogbayes.diagnose.terms.Term` s -- one per
 value of its searched parameter -- that would be *added* to the current model (nested
@@ -53,7 +53,7 @@ MAX_TIMES = {"temperature_order": 3, "time_drift": 2, "step": 3, "periodic": 3,
 class Candidate(NamedTuple):
     """One effect the model lacks.
 
-    effect: DESIGN.md name; kind: "linear" (grid of nested terms), "spectral" (periodic,
+    effect: docs/DESIGN.md name; kind: "linear" (grid of nested terms), "spectral" (periodic,
     scanned by FFT) or "noise" (a noise-model component); grid: one Term per searched
     value; covariates: the drivers it uses; searched: the searched parameter or None.
     """

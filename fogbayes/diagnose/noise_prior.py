@@ -7,7 +7,7 @@ a 0.5 deg/h warm-up (on the loop sweep's records a cap at K = 0.12 deg/h^1.5 did
 and 0.06 barely did, against a true 0.02), the warm-up's evidence is then calibrated under
 that walk, and it is missed (0.5x warm-ups: 2 of 3, final RMS 3.05-3.77x the oracle's;
 benchmarks/RESULTS_loop.md). A static run of the
-same sensor says how large its walk can be; DESIGN.md ("constrain the noise by what the
+same sensor says how large its walk can be; docs/DESIGN.md ("constrain the noise by what the
 record itself says about it ... priors"). The loop then bounds the walk by it:
 
     K <= K_max,   i.e. for block means of length dt (s), relative to the white variance s2:

@@ -15,7 +15,7 @@ evidence with the correlation taken into account (``order_criterion="loo"`` in t
 workflow).
 
 WAIC and LOO come from ArviZ 0.23 (``az.waic``, ``az.loo``; the 0.x line still has
-``waic``, see DESIGN.md) on the pointwise log-likelihood of
+``waic``, see docs/DESIGN.md) on the pointwise log-likelihood of
 :func:`fogbayes.inference.bayes.fit_linear_bayes`; :func:`compare` ranks several fits by
 expected log predictive density (higher is better).
 """

@@ -1,4 +1,4 @@
-"""Typed results of the closed loop and their JSON form (DESIGN.md contract).
+"""Typed results of the closed loop and their JSON form (docs/DESIGN.md contract).
 
 ``LoopResult.to_json()`` returns exactly::
 

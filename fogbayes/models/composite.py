@@ -98,7 +98,7 @@ class RawCoefficients(NamedTuple):
 
 
 #: Paper 000's printed coefficients (eq. 15, 16, 12). Eq. 17 misprints M[0, 2] as
-#: -7.9343e-7; eq. 15's -7.9343e-4 is the value that reproduces Tables 1-2 (REFERENCE.md).
+#: -7.9343e-7; eq. 15's -7.9343e-4 is the value that reproduces Tables 1-2 (docs/REFERENCE.md).
 PAPER_000 = RawCoefficients(
     M=np.array([[3.9621e1, -5.9735e-4, -7.9343e-4, 7.1717e-8],
                 [-1.3299e-2, 7.5276e-6, 5.5587e-7, -1.1835e-9],

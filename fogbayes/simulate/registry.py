@@ -2,7 +2,7 @@
 
 ``effect_rate(name, cov, params)`` evaluates a deterministic effect in deg/h from the
 true covariates (:class:`~fogbayes.simulate.truth.Covariates`). The names are those the
-closed loop knows (DESIGN.md); ``markov_noise`` is the one stochastic effect and is drawn
+closed loop knows (docs/DESIGN.md); ``markov_noise`` is the one stochastic effect and is drawn
 by the scenario with its own seed stream.
 """
 

@@ -1,7 +1,7 @@
 """Workflows: the order of the stages for each model family, one module per family.
 
 ``fit_recording(rec, *, model, orders=None, bayes=False, seed=0, **options) -> dict`` and
-``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (DESIGN.md / contracts):
+``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (docs/DESIGN.md / contracts):
 
 * :mod:`.thermal`   -- ``bias-t`` and ``thermal`` (paper 004)
 * :mod:`.composite` -- ``composite`` (paper 000)
