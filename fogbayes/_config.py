@@ -8,7 +8,9 @@ float32, which is how the compensators run in single precision when asked.
 
 JAX is not imported here (0.5 s): ``fogbayes --help`` and commands that fit nothing do
 not need it. If JAX is already imported the switch is flipped now; otherwise the
-environment variable is set, which JAX reads when it is first imported.
+environment variable is set, which JAX reads when it is first imported. Child processes
+inherit that variable: JAX programs they run are float64 too (as fogbayes' own Dask
+workers need).
 """
 
 import os
