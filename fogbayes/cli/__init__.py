@@ -16,6 +16,7 @@ import threading
 
 import typer
 
+from ..data.atomic import Stopped, clear_stop
 from ..errors import FogbayesError
 from . import _common
 from ._app import app
@@ -37,7 +38,14 @@ class Terminated(SystemExit):
 
 
 def _terminated(signum, frame):
-    """SIGTERM: unwind like an exception (cleanup and ``finally`` blocks run), exit 143."""
+    """SIGTERM: unwind like an exception (cleanup and ``finally`` blocks run), exit 143.
+
+    The flag comes first: should the exception land in a finaliser, where Python drops it,
+    the next atomic write still stops before its rename (:func:`fogbayes.data.atomic.request_stop`).
+    """
+    from ..data.atomic import request_stop
+
+    request_stop(128 + signum)
     raise Terminated(128 + signum)
 
 
@@ -58,11 +66,12 @@ def main(argv: list[str] | None = None) -> int:
               "folder's permissions", file=sys.stderr)
         return 2
     except SystemExit as exc:
-        if isinstance(exc, Terminated):
+        if isinstance(exc, (Terminated, Stopped)):
             print("fogbayes: terminated (SIGTERM); unfinished outputs were not written",
                   file=sys.stderr)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     finally:
+        clear_stop()
         if installed:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
     return 0

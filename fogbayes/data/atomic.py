@@ -33,6 +33,28 @@ from ..errors import FileFormatError
 TMP_MARK = ".tmp-"
 
 
+class Stopped(SystemExit):
+    """A stop was requested (SIGTERM) while a file was being written: it is not renamed."""
+
+
+#: Exit code of a stop requested by a signal handler (:func:`request_stop`), else None.
+_STOP: dict = {"code": None}
+
+
+def request_stop(code: int) -> None:
+    """Ask every atomic write still running to abandon its file instead of renaming it.
+
+    A signal handler raises its exception where the main thread happens to be; inside a
+    finaliser or a weakref callback Python prints and drops it, and the command would go
+    on. This flag is the second line: :func:`atomic_path` checks it before the rename.
+    """
+    _STOP["code"] = code
+
+
+def clear_stop() -> None:
+    _STOP["code"] = None
+
+
 def temp_path(path: str | Path) -> Path:
     """A fresh hidden temporary name beside ``path``, keeping its suffix."""
     path = Path(path)
@@ -109,6 +131,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         if not tmp.is_file():
             raise FileFormatError("the writer left no file", file=str(path))
         _fsync(tmp)
+        if _STOP["code"] is not None:  # stopped while writing: never rename a doubtful file
+            raise Stopped(_STOP["code"])
         if path.is_file():  # keep the permissions of the file replaced
             shutil.copymode(path, tmp)
         os.replace(tmp, path)
