@@ -12,7 +12,9 @@ PX4 (``TC_G<i>_*`` parameters, rad/s): the firmware corrects a gyro axis ``a`` a
 
 so only a cubic in one temperature fits (no dT/dt term: the firmware has no input for it).
 :func:`px4_gyro_parameters` rebases ``bias-t`` polynomials (order <= 3, deg/h) about TREF
-and converts them to rad/s; a ``thermal`` model raises an error that says so.
+and converts them to rad/s; a ``thermal`` model raises an error that says so; a loop
+document's calibration goes through :func:`basis_from_loop` (which names any term PX4
+cannot take).
 """
 
 from __future__ import annotations
@@ -109,6 +111,45 @@ def px4_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, gyro_in
             v = about_ref[basis.terms.index((k,))] if (k,) in basis.terms else 0.0
             out[f"{g}X{k}_{a}"] = float(v * DEG_H_TO_RAD_S)
     return out
+
+
+def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis, np.ndarray]:
+    """The temperature polynomial of a loop document's calibration as (basis, coef), deg/h.
+
+    The sensor's terms must be the intercept and powers of the first temperature channel
+    (one centre and scale), the form PX4 takes; any other sensor term (dT/dt, a gradient, a
+    lag, hysteresis, a warm-up, a scale factor) is refused by name. Run events of the
+    calibration run (a step, a linear drift, a periodic term) are not part of the sensor
+    and are left out.
+    """
+    cal = doc["calibration"]
+    powers, coef, where, i = [], [], None, 0
+    for t in cal["terms"]:
+        k = 2 if t["kind"] == "periodic" else len(t["params"].get("powers", [0]))
+        c = cal["coefficients"][i:i + k]
+        i += k
+        if t.get("applies") == "run":
+            continue
+        if t["kind"] == "intercept":
+            powers.append(0)
+            coef.extend(c)
+        elif t["kind"] == "tpoly" and t["params"]["channel"] == 0:
+            p = t["params"]
+            if where is not None and where != (p["centre"], p["scale"]):
+                raise ExportError("the calibration's temperature terms use different "
+                                  "centres/scales", file=source, column="calibration.terms")
+            where = (p["centre"], p["scale"])
+            powers.extend(p["powers"])
+            coef.extend(c)
+        else:
+            raise ExportError(f"PX4 compensates with a polynomial in one temperature only; the "
+                              f"calibration has the term {t['effect']!r} ({t['kind']}), which "
+                              f"the firmware has no input for", file=source, column="model",
+                              fix="export a loop run without that effect, or apply the "
+                                  "calibration with 'fogbayes compensate'")
+    centre, scale = where if where is not None else (0.0, 1.0)
+    return (PolyBasis(("T",), tuple((e,) for e in powers), (float(centre),), (float(scale),)),
+            np.asarray(coef, float))
 
 
 def px4_param_file(params: dict, *, vehicle_id: int = 1, component_id: int = 1) -> str:

@@ -19,10 +19,69 @@ from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OP
 
 
 def read_fit(path: Path) -> dict:
-    """The validated fit document at ``path`` (:mod:`fogbayes.data.documents`)."""
-    from ..data.documents import read_fit_document
+    """The validated fit or loop document at ``path`` (:mod:`fogbayes.data.documents`)."""
+    from ..data.documents import read_calibration
 
-    return read_fit_document(path)
+    return read_calibration(path)
+
+
+def loop_summary(rec, doc: dict, applied, *, rec_path, params, out) -> dict:
+    """The ``--json`` document of a loop calibration applied to ``rec``: rows, outliers,
+    run events left out, covariates outside the calibrated range and, for the bias family,
+    10 s RMS and bias stability before/after (:mod:`fogbayes.loop.metrics`)."""
+    from ..loop.metrics import block_rms
+    from ..metrics import stability_report
+
+    cols = applied.columns
+    out_doc = {"file": str(rec_path), "params": str(params), "out": str(out),
+               "model": doc.get("model"), "schema": doc.get("schema"),
+               "rows": int(len(cols["time"])), "outliers": int(cols["outlier"].sum()),
+               "columns": list(cols), "terms_applied": [
+                   t["effect"] + ":" + t["kind"] for t in doc["calibration"]["terms"]
+                   if t["kind"] not in {s["kind"] for s in applied.skipped}],
+               "run_events_left_out": applied.skipped, "outside_calibrated_range":
+               applied.outside}
+    if applied.bias_deg_h is not None:
+        before = rec.rate("deg/h")
+        after = before - applied.bias_deg_h
+        t, flag = cols["time"], cols["outlier"]
+        out_doc["unit"] = rec.unit
+        out_doc["rms_10s_deg_h"] = {"before": block_rms(t, before, flag),
+                                    "after": block_rms(t, after, flag),
+                                    "after_about_mean": block_rms(
+                                        t, after - after[~flag].mean(), flag)}
+        out_doc["metrics"] = stability_report(before, after, t)
+    return out_doc
+
+
+def compensate_with_loop(doc: dict, recording, *, rec_path, params, out, json_out,
+                         run_events: bool) -> None:
+    """Apply the calibration of a loop document to ``recording`` and write the outputs."""
+    from ..data import write_csv_mixed
+    from ..errors import about_file
+    from ..loop.calibration import apply_calibration
+
+    with progress(f"compensating {recording.n} samples (loop calibration, {doc['model']})"), \
+            about_file(rec_path):
+        applied = apply_calibration(doc, recording, run_events=run_events)
+        write_csv_mixed(out, applied.columns)
+    cols = applied.columns
+    say(f"wrote {out}: {len(cols['time'])} rows, {int(cols['outlier'].sum())} flagged as "
+        "outliers")
+    for s in applied.skipped:
+        say(f"left out {s['effect']} ({s['kind']}): a run event of the calibration run; "
+            "--run-events applies it")
+    for o in applied.outside:
+        (lo, hi), (slo, shi) = o["calibrated"], o["seen"]
+        say(f"warning: {o['covariate']} outside the calibrated range [{lo:.3g}, {hi:.3g}] on "
+            f"{100 * o['share']:.1f} % of the samples (seen [{slo:.3g}, {shi:.3g}]): "
+            "extrapolated")
+    summ = loop_summary(recording, doc, applied, rec_path=rec_path, params=params, out=out)
+    if "rms_10s_deg_h" in summ:
+        r = summ["rms_10s_deg_h"]
+        say(f"10 s RMS {r['before']:.4g} -> {r['after']:.4g} deg/h")
+    if json_out:
+        write_json(summ, json_out)
 
 
 def summary(rec, fit_doc: dict, cols: dict, *, rec_path, params, out) -> dict:
@@ -46,7 +105,8 @@ def summary(rec, fit_doc: dict, cols: dict, *, rec_path, params, out) -> dict:
 def compensate(
     rec: Path = REC_ARG,
     params: Path = typer.Option(..., "--params", "--fit", "-p",
-                                help="Fit document from 'fogbayes fit --json'."),
+                                help="Fit document from 'fogbayes fit --json', or a loop "
+                                "document from 'fogbayes loop --json'."),
     out: Path = typer.Option(..., "--out", "-o", help="Compensated CSV to write."),
     json_out: str = typer.Option(None, "--json", help="Also write a summary document (rows, "
                                  "outliers, bias stability before/after) ('-' = stdout)."),
@@ -71,6 +131,10 @@ def compensate(
                                 "or a folder (same numbers as the in-memory path)."),
     chunk_rows: int = typer.Option(1 << 20, "--chunk-rows", min=1024,
                                    help="Rows read at a time with --stream."),
+    run_events: bool = typer.Option(False, "--run-events",
+                                    help="With a loop document: also apply the calibration "
+                                    "run's own events (a step, a linear drift, a periodic "
+                                    "term); by default only the sensor's properties are."),
     quiet: bool = QUIET_OPT,
 ):
     """Compensate a recording with a fitted model; every input row is written.
@@ -82,6 +146,7 @@ def compensate(
       fogbayes compensate run.csv -p fit.json -o comp.csv --json summary.json
       fogbayes -q compensate run.csv -p fit.json -o comp.csv --json -
       fogbayes compensate big.parquet -p fit.json -o comp.parquet --stream
+      fogbayes compensate next_run.csv -p loop.json -o comp.csv --json summary.json
     """
     from ..data import write_csv_mixed
     from ..errors import FogbayesError, about_file
@@ -90,14 +155,38 @@ def compensate(
     refuse_overwrite({"the recording": rec, "the --params document": params},
                      {"--out": out, "--json": json_out})
     fit_doc = read_fit(params)
+    from ..data.documents import agreed_unit, check_channels
+    from ..data.doc_rules import is_loop_document
+
+    if is_loop_document(fit_doc):
+        if fit_doc["model"] == "allan" or stream:
+            raise FogbayesError(
+                "this loop document describes noise only: there is nothing to compensate"
+                if fit_doc["model"] == "allan" else
+                "--stream cannot apply a loop calibration yet (its dT/dt and lag terms are "
+                "computed over the whole record)", file=str(params), column="--params",
+                fix="compensate with a bias-t, thermal or composite loop document"
+                if fit_doc["model"] == "allan" else "drop --stream (the in-memory path "
+                                                    "applies it)")
+        given = fit_doc.get("input") or {}
+        recording = load_recording(
+            rec, column=column, time_column=time_column,
+            output_unit=agreed_unit(fit_doc, str(params), rec, output_unit),
+            scale_factor=scale_factor if scale_factor is not None else given.get("scale_factor"),
+            temperature=temperature, input_rate=input_rate, time_unit=time_unit,
+            temperature_scale=temperature_scale, temperature_offset=temperature_offset)
+        compensate_with_loop(fit_doc, recording, rec_path=rec, params=params, out=out,
+                             json_out=json_out, run_events=run_events)
+        return
+    if run_events:
+        raise FogbayesError("--run-events applies to loop documents only", column="--run-events",
+                            fix="drop --run-events with a fit document")
     wf = workflow_for(str(fit_doc["model"]))
     if getattr(wf, "compensate_recording", None) is None:
         raise FogbayesError(f"model '{fit_doc['model']}' describes noise: there is nothing to "
                             "compensate", file=str(params), column="model",
                             fix="compensate with a bias-t, thermal or composite fit")
     given = fit_doc.get("input") or {}
-    from ..data.documents import agreed_unit, check_channels
-
     unit = agreed_unit(fit_doc, str(params), rec, output_unit)  # file, document, option agree
     if stream:
         from ..stream import compensate_stream, open_source

@@ -14,6 +14,10 @@ from ..errors import FileFormatError
 SCHEMA_NAME = "fogbayes.fit"
 SCHEMA_VERSION = 1
 FIT_SCHEMA = f"{SCHEMA_NAME}/{SCHEMA_VERSION}"
+#: The loop document's schema (``fogbayes loop --json``, :mod:`fogbayes.loop.calibration`).
+LOOP_SCHEMA_NAME = "fogbayes.loop"
+LOOP_SCHEMA_VERSION = 1
+LOOP_SCHEMA = f"{LOOP_SCHEMA_NAME}/{LOOP_SCHEMA_VERSION}"
 
 #: Deepest nesting accepted (fogbayes writes at most ~7 levels).
 MAX_DEPTH = 32
@@ -55,6 +59,16 @@ TOP_LEVEL_KEYS["thermal"] = TOP_LEVEL_KEYS["bias-t"]
 #: Models whose document is applied to a recording (their unit must agree with it).
 COMPENSATING = ("bias-t", "thermal", "composite")
 
+
+
+def is_loop_document(doc) -> bool:
+    """A loop document: a loop schema, or (written before schemas) steps and no params."""
+    if not isinstance(doc, dict):
+        return False
+    schema = doc.get("schema")
+    if isinstance(schema, str) and schema.startswith(LOOP_SCHEMA_NAME + "/"):
+        return True
+    return "params" not in doc and {"steps", "initial"} <= set(doc)
 
 
 class FitDocumentError(FileFormatError):

@@ -60,35 +60,56 @@ from .doc_rules import (
     FitDocumentError,
     _Checker,
     _kind,
+    is_loop_document,
 )
 
 __all__ = ["COMPENSATING", "FIT_SCHEMA", "FitDocumentError", "agreed_unit", "check_basis",
-           "check_channels", "declared_unit", "read_fit_document", "validate_fit_document",
-           "validate_in_memory"]
+           "check_channels", "declared_unit", "read_calibration", "read_fit_document",
+           "validate_fit_document", "validate_in_memory"]
 
 
 # -- reading ----------------------------------------------------------------------------
-def read_fit_document(path: str | Path) -> dict:
-    """The validated fit document at ``path`` (see the module doc for what is checked)."""
+def _load(path: str | Path, what: str = "fit") -> Any:
+    """The parsed JSON at ``path``; a :class:`FitDocumentError` naming it if unreadable."""
     src = str(path)
+    fix = f"pass the JSON file written by 'fogbayes {what} --json'"
     try:
         text = Path(path).read_text(encoding="utf-8")
     except FileNotFoundError:
         raise FitDocumentError("file not found", file=src,
-                               fix="check the path of the fit document") from None
+                               fix=f"check the path of the {what} document") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise FitDocumentError(f"cannot read the file ({type(exc).__name__}: {exc})", file=src,
-                               fix="pass the JSON file written by 'fogbayes fit --json'") from None
+                               fix=fix) from None
     try:
-        doc = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise FitDocumentError(f"not valid JSON ({exc.msg} at line {exc.lineno} column "
-                               f"{exc.colno})", file=src,
-                               fix="pass the JSON file written by 'fogbayes fit --json'") from None
+                               f"{exc.colno})", file=src, fix=fix) from None
     except (RecursionError, ValueError) as exc:  # nesting beyond the parser's stack; huge ints
         raise FitDocumentError(f"cannot be parsed ({type(exc).__name__}): nested deeper than "
                                f"{MAX_DEPTH} levels or numbers too long", file=src) from None
-    validate_fit_document(doc, src)
+
+
+def read_fit_document(path: str | Path) -> dict:
+    """The validated fit document at ``path`` (see the module doc for what is checked)."""
+    doc = _load(path)
+    validate_fit_document(doc, str(path))
+    return doc
+
+
+def read_calibration(path: str | Path) -> dict:
+    """A fit document or a loop document (``fogbayes loop --json``), validated as what it is.
+
+    Loop documents are checked by :func:`fogbayes.loop.calibration_doc.validate_loop_document`
+    (their ``calibration`` must be applicable); anything else as a fit document.
+    """
+    doc = _load(path)
+    if is_loop_document(doc):  # the validator (and the loop package) only when needed
+        from ..loop.calibration_doc import validate_loop_document
+
+        return validate_loop_document(doc, str(path))
+    validate_fit_document(doc, str(path))
     return doc
 
 
@@ -103,11 +124,11 @@ def validate_fit_document(doc: Any, source: str | None = None) -> dict:
     if not isinstance(doc, dict):
         v.fail(None, f"the document is a JSON {type(doc).__name__}, not an object with a "
                      "'model' key")
-    if "params" not in doc and {"steps", "initial"} <= set(doc):
+    if is_loop_document(doc):
         v.fail(None, "this is a loop document (written by 'fogbayes loop --json'), not a fit "
-                     "document", fix="pass the document of 'fogbayes fit --json' (a loop "
-                                     "document goes to 'report --loop'; the loop writes its "
-                                     "compensated output itself with --compensated)")
+                     "document", fix="pass the document of 'fogbayes fit --json' here (a loop "
+                                     "document goes to 'compensate --params' and "
+                                     "'report --loop')")
     _check_schema(doc, v)
     _scan(doc, v)
     model = v.get(doc, "model", str)

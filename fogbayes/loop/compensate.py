@@ -20,24 +20,35 @@ from ..units import convert_rate
 _OMEGA_KINDS = ("omega_poly", "omega_abs", "omega_tpoly")
 
 
-def _model(fit: ModelFit, cov: Covariates) -> np.ndarray:
-    return design(list(fit.terms), cov) @ fit.beta
+def _model(terms, beta, cov: Covariates) -> np.ndarray:
+    return design(list(terms), cov) @ beta
+
+
+def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray, *,
+               iterations: int = 5) -> np.ndarray:
+    """W (deg/s) with model(W) = measured rate (deg/h), per sample (Newton, module doc)."""
+    scale = max(float(np.max(np.abs(cov.omega))), 1e-9) if cov.omega is not None else 1.0
+    w0 = np.zeros_like(rate_deg_h)
+    f0 = _model(terms, beta, cov._replace(omega=w0))
+    h = 1e-4 * scale
+
+    def slope_at(w):
+        return (_model(terms, beta, cov._replace(omega=w + h))
+                - _model(terms, beta, cov._replace(omega=w - h))) / (2 * h)
+
+    slope = slope_at(w0)
+    w = (rate_deg_h - f0) / slope
+    for _ in range(iterations):
+        f = _model(terms, beta, cov._replace(omega=w))
+        d = slope_at(w)
+        w = w - (f - rate_deg_h) / np.where(np.abs(d) > 0, d, slope)
+    return w
 
 
 def invert_rate(fit: ModelFit, cov: Covariates, rate_deg_h: np.ndarray, *,
                 iterations: int = 5) -> np.ndarray:
-    """W (deg/s) with model(W) = measured rate (deg/h), per sample (Newton)."""
-    scale = max(float(np.max(np.abs(cov.omega))), 1e-9) if cov.omega is not None else 1.0
-    w0 = np.zeros_like(rate_deg_h)
-    f0 = _model(fit, cov._replace(omega=w0))
-    h = 1e-4 * scale
-    slope = (_model(fit, cov._replace(omega=w0 + h)) - _model(fit, cov._replace(omega=w0 - h))) / (2 * h)
-    w = (rate_deg_h - f0) / slope
-    for _ in range(iterations):
-        f = _model(fit, cov._replace(omega=w))
-        d = (_model(fit, cov._replace(omega=w + h)) - _model(fit, cov._replace(omega=w - h))) / (2 * h)
-        w = w - (f - rate_deg_h) / np.where(np.abs(d) > 0, d, slope)
-    return w
+    """:func:`solve_rate` with the terms and coefficients of ``fit``."""
+    return solve_rate(fit.terms, fit.beta, cov, rate_deg_h, iterations=iterations)
 
 
 def compensate(rec, ctx: Context, fit: ModelFit, model: str) -> dict[str, np.ndarray]:
@@ -46,7 +57,7 @@ def compensate(rec, ctx: Context, fit: ModelFit, model: str) -> dict[str, np.nda
     if model == "composite":
         cols["rate"] = invert_rate(fit, ctx.cov, ctx.rate)
     else:
-        comp = ctx.rate - _model(fit, ctx.cov)
+        comp = ctx.rate - _model(fit.terms, fit.beta, ctx.cov)
         cols["output"] = convert_rate(comp, "deg/h", rec.unit, scale_factor=rec.scale_factor)
     cols["outlier"] = ctx.outlier.copy()
     return cols

@@ -2,11 +2,14 @@
 
 ``LoopResult.to_json()`` returns exactly::
 
-    {"model": ..., "initial": {"rms", "bias_stability", "elpd"},
+    {"schema": "fogbayes.loop/1", "model": ..., "initial": {"rms", "bias_stability", "elpd"},
      "steps": [{"effect", "covariates", "detail", "evidence", "rms_before", "rms_after"}],
-     "final": {"rms", "bias_stability", "elpd"}, "unexplained": [{"kind", "detail"}]}
+     "final": {"rms", "bias_stability", "elpd"}, "unexplained": [{"kind", "detail"}],
+     "input": {...}, "calibration": {...}}
 
-(rms and bias stability in deg/h, elpd in nats of the block-mean predictive density), plus
+(rms and bias stability in deg/h, elpd in nats of the block-mean predictive density;
+``input`` and ``calibration``: the final model as a calibration another run of the sensor
+can be compensated with, :mod:`fogbayes.loop.calibration`), plus
 ``"noise_prior"`` when the loop ran under one (:mod:`fogbayes.diagnose.noise_prior`).
 """
 
@@ -60,6 +63,8 @@ class LoopResult(NamedTuple):
     compensated: dict[str, np.ndarray]
     rule: str
     noise_prior: NoisePrior | None = None
+    input: dict | None = None          # unit, scale factor, channels of the recording
+    calibration: dict | None = None    # the final model, applicable to new runs
 
     @property
     def effects(self) -> list[str]:
@@ -72,8 +77,13 @@ class LoopResult(NamedTuple):
         steps = [{"effect": s.effect, "covariates": list(s.covariates), "detail": s.detail,
                   "evidence": s.evidence, "rms_before": s.rms_before, "rms_after": s.rms_after}
                  for s in self.steps]
-        doc = {"model": self.model, "initial": m(self.initial), "steps": steps,
+        from .calibration import LOOP_SCHEMA
+
+        doc = {"schema": LOOP_SCHEMA, "model": self.model, "initial": m(self.initial), "steps": steps,
                "final": m(self.final), "unexplained": self.unexplained}
         if self.noise_prior is not None:  # an assumption every number above depends on
             doc["noise_prior"] = self.noise_prior.to_json(self.context.grid.dt)
+        if self.calibration is not None:
+            doc["input"] = self.input
+            doc["calibration"] = self.calibration
         return to_jsonable(doc)

@@ -1,0 +1,197 @@
+"""The loop's final model as a calibration: written into the loop document, applied to new runs.
+
+``fogbayes loop --json`` writes, beside the story of the loop, a ``calibration`` section
+(schema ``fogbayes.loop/1``) that ``fogbayes compensate --params`` applies to *another*
+recording of the same sensor::
+
+    "calibration": {
+      "family": "bias" | "composite",
+      "terms": [{"kind", "effect", "params", "labels", "applies": "sensor" | "run"}, ...],
+      "coefficients": [...],          # deg/h, on the centred/scaled columns of the terms
+      "stderr": [...], "covariance": [[...]],
+      "processing": {...},            # time origin, block, dT/dt estimator, outlier rule
+      "valid": {...},                 # temperature per channel, dT/dt, input rate, span
+      "noise": {...}                  # the loop's noise model (white level, components)
+    }
+
+The model is the loop's final GLS fit (:func:`fogbayes.diagnose.fitting.fit_terms`):
+``bias(t) = sum_j X_j(cov(t)) c_j`` with the term columns of :mod:`fogbayes.diagnose.terms`
+evaluated on the new recording's own covariates (the same pipeline as the loop: block grid,
+Savitzky-Golay dT/dt with the chamber's corners kept, first-order lags started at the first
+sample). Compensation: bias family ``output - bias`` (in the input unit); composite family
+the input rate W solving ``U = f(W, T, t)`` (:func:`fogbayes.loop.compensate.solve_rate`).
+
+Sensor properties and run events (``applies``): a term that describes the sensor
+(temperature law, Shupe dT/dt, gradient, lag, hysteresis, scale factor, the warm-up since
+power-on, U1(T) t since a rate step) is applied to every new run; a term tied to the
+calibration run's own clock (a step at a given time, a linear drift across that run, a
+periodic disturbance with that run's phase) is a *run event*: it is not carried to a new
+run unless asked (``run_events=True``). The warm-up term counts time from the first sample
+of the recording, taken as power-on.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..data.doc_rules import LOOP_SCHEMA  # noqa: F401 -- written by LoopResult.to_json
+from ..diagnose.context import spike_flags
+from ..diagnose.covariates import block_grid, covariates_of
+from ..diagnose.terms import Term, design, labels
+from ..units import convert_rate
+from .compensate import solve_rate
+
+
+#: Term kinds tied to the calibration run's clock (not carried to a new run by default).
+RUN_EVENT_KINDS = ("step", "drift_lin", "periodic")
+#: Term kinds that act on the input rate (the composite family inverts them).
+OMEGA_KINDS = ("omega_poly", "omega_abs", "omega_tpoly")
+#: The block grid and dT/dt window of the loop's covariates (diagnose/context.make_context).
+TARGET_BLOCKS = 2500
+RATE_WINDOW_S = 60.0
+
+PROCESSING = {
+    "time_origin": "first sample of the recording (taken as power-on)",
+    "temperature_rate": "Savitzky-Golay (order 2) slope of block-mean temperature over "
+                        "rate_window_s, chamber corners kept; deg C/min of the first channel",
+    "rate_window_s": RATE_WINDOW_S,
+    "target_blocks": TARGET_BLOCKS,
+    "outliers": "isolated spikes of the first difference beyond 6 sigma_MAD: flagged, left "
+                "out of the fit, kept (compensated) in the output",
+    "lag": "first-order lag started at the first sample's temperature",
+    "fit": "generalised least squares on block means; white + flicker + random-walk "
+           "(+ Gauss-Markov) noise by maximum likelihood",
+}
+
+
+def applies(kind: str) -> str:
+    """``"run"`` for a term tied to the calibration run's clock, else ``"sensor"``."""
+    return "run" if kind in RUN_EVENT_KINDS else "sensor"
+
+
+def _range(x) -> list[float] | None:
+    if x is None or np.size(x) == 0:
+        return None
+    return [float(np.min(x)), float(np.max(x))]
+
+
+def calibration_json(fit, ctx, model: str) -> dict[str, Any]:
+    """The ``calibration`` section of the loop's final ``fit`` on context ``ctx``."""
+    terms = []
+    for tm in fit.terms:
+        params = {k: v for k, v in tm.params.items() if k != "effect"}
+        terms.append({"kind": tm.kind, "effect": tm.params.get("effect", "base"),
+                      "params": params, "labels": labels(tm), "applies": applies(tm.kind)})
+    cov = ctx.cov
+    keep = ~ctx.outlier
+    valid = {"duration_s": float(cov.duration),
+             "temperature": [_range(cov.T[keep, j]) for j in range(cov.n_temps)],
+             "temperature_names": list(cov.names),
+             "temperature_rate_degC_per_min": _range(None if cov.Tdot is None
+                                                     else cov.Tdot[keep]),
+             "input_rate_deg_s": _range(None if cov.omega is None else cov.omega[keep])}
+    nf = fit.noise
+    cb = np.asarray(nf.cov_beta, float)
+    return {"family": "composite" if model == "composite" else "bias",
+            "terms": terms,
+            "coefficients": [float(b) for b in nf.beta],
+            "stderr": [float(s) for s in np.sqrt(np.clip(np.diag(cb), 0.0, None))],
+            "covariance": cb.tolist(),
+            "processing": {**PROCESSING, "block_s": float(ctx.grid.dt)},
+            "valid": valid,
+            "noise": {"white_variance_block": float(nf.sigma2), "block_s": float(nf.spec.dt),
+                      "flicker_bank": bool(nf.spec.bank_taus),
+                      "random_walk": bool(nf.spec.random_walk),
+                      "gauss_markov_components": int(nf.spec.n_markov),
+                      "converged": bool(nf.converged)}}
+
+
+def input_json(rec) -> dict[str, Any]:
+    """What a new recording must provide: unit, scale factor, channels, input rate."""
+    return {"unit": rec.unit, "scale_factor": rec.scale_factor,
+            "temperatures": list(rec.temperature_names),
+            "input_rate": rec.input_rate is not None,
+            "sensor_id": rec.meta.sensor_id, "file": rec.meta.source}
+
+
+class Applied(NamedTuple):
+    """A calibration applied to a recording: output columns and what the user should know."""
+
+    columns: dict[str, np.ndarray]   # time, output (or rate), outlier
+    bias_deg_h: np.ndarray | None    # the subtracted bias (bias family), deg/h
+    skipped: list[dict]              # run-event terms not applied
+    outside: list[dict]              # covariates outside the calibrated range
+
+
+def _term(d: dict) -> Term:
+    return Term(d["kind"], dict(d["params"]))
+
+
+def _outside(valid: dict, cov, names: list[str]) -> list[dict]:
+    """Share of samples whose covariates lie outside the calibration run's range."""
+    out = []
+
+    def check(what, x, rng):
+        if x is None or rng is None:
+            return
+        lo, hi = rng
+        span = hi - lo
+        tol = 1e-6 * max(abs(lo), abs(hi), 1.0)  # the run's own ends are inside
+        n = int(np.count_nonzero((x < lo - tol) | (x > hi + tol)))
+        if n:
+            out.append({"covariate": what, "samples": n, "share": n / x.size,
+                        "calibrated": [lo, hi], "seen": [float(np.min(x)), float(np.max(x))],
+                        "beyond_by": float(max(lo - np.min(x), np.max(x) - hi, 0.0)),
+                        "calibrated_span": span})
+
+    for j, rng in enumerate(valid.get("temperature") or []):
+        if j < cov.n_temps:
+            check(f"temperature '{names[j]}' (deg C)", cov.T[:, j], rng)
+    check("dT/dt (deg C/min)", cov.Tdot, valid.get("temperature_rate_degC_per_min"))
+    check("input rate (deg/s)", cov.omega, valid.get("input_rate_deg_s"))
+    return out
+
+
+def apply_calibration(doc: dict, rec, *, run_events: bool = False) -> Applied:
+    """Compensate recording ``rec`` with the (validated) loop document ``doc``.
+
+    ``rec`` must carry the document's temperature channels (matched by name, in the
+    document's order; :func:`fogbayes.loop.calibration_doc.match_channels`).
+    """
+    from .calibration_doc import match_channels
+
+    cal = doc["calibration"]
+    rec = match_channels(doc, rec)
+    rate = rec.rate("deg/h")
+    outlier = spike_flags(rate)
+    proc = cal.get("processing") or {}
+    grid = block_grid(rec.time, rec.sample_rate, use=~outlier,
+                      target_blocks=int(proc.get("target_blocks", TARGET_BLOCKS)))
+    cov = covariates_of(rec, grid, rate_window_s=float(proc.get("rate_window_s",
+                                                                  RATE_WINDOW_S)))
+    terms, beta, skipped, i = [], [], [], 0
+    for d in cal["terms"]:
+        tm = _term(d)
+        k = tm.n_cols
+        if d.get("applies") == "run" and not run_events:
+            skipped.append({"effect": d.get("effect"), "kind": tm.kind,
+                            "why": "a run event of the calibration run (pass run events "
+                                   "to apply it)"})
+        else:
+            terms.append(tm)
+            beta.extend(cal["coefficients"][i:i + k])
+        i += k
+    beta = np.asarray(beta, float)
+    cols = {"time": np.asarray(rec.time, float)}
+    bias = None
+    if cal["family"] == "composite":
+        cols["rate"] = solve_rate(terms, beta, cov, rate)
+    else:
+        bias = design(terms, cov) @ beta if terms else np.zeros(rec.n)
+        cols["output"] = convert_rate(rate - bias, "deg/h", rec.unit,
+                                      scale_factor=rec.scale_factor)
+    cols["outlier"] = outlier
+    return Applied(cols, bias, skipped, _outside(cal.get("valid") or {}, cov,
+                                                 list(cov.names)))
