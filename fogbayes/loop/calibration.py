@@ -36,16 +36,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..data.doc_rules import LOOP_SCHEMA  # noqa: F401 -- written by LoopResult.to_json
 from ..diagnose.context import spike_flags
 from ..diagnose.covariates import block_grid, covariates_of
-from ..diagnose.terms import Term, design, labels
+from ..diagnose.terms import KINDS, Term, design, labels
 from ..units import convert_rate
 from .compensate import solve_rate
 
 
 #: Term kinds tied to the calibration run's clock (not carried to a new run by default).
-RUN_EVENT_KINDS = ("step", "drift_lin", "periodic")
+RUN_EVENT_KINDS = tuple(k for k, v in KINDS.items() if v.applies == "run")
 #: Term kinds that act on the input rate (the composite family inverts them).
 OMEGA_KINDS = ("omega_poly", "omega_abs", "omega_tpoly")
 #: The block grid and dT/dt window of the loop's covariates (diagnose/context.make_context).
@@ -66,11 +65,6 @@ PROCESSING = {
 }
 
 
-def applies(kind: str) -> str:
-    """``"run"`` for a term tied to the calibration run's clock, else ``"sensor"``."""
-    return "run" if kind in RUN_EVENT_KINDS else "sensor"
-
-
 def _range(x) -> list[float] | None:
     if x is None or np.size(x) == 0:
         return None
@@ -83,7 +77,7 @@ def calibration_json(fit, ctx, model: str) -> dict[str, Any]:
     for tm in fit.terms:
         params = {k: v for k, v in tm.params.items() if k != "effect"}
         terms.append({"kind": tm.kind, "effect": tm.params.get("effect", "base"),
-                      "params": params, "labels": labels(tm), "applies": applies(tm.kind)})
+                      "params": params, "labels": labels(tm), "applies": tm.applies})
     cov = ctx.cov
     keep = ~ctx.outlier
     valid = {"duration_s": float(cov.duration),
@@ -175,7 +169,7 @@ def apply_calibration(doc: dict, rec, *, run_events: bool = False) -> Applied:
     for d in cal["terms"]:
         tm = _term(d)
         k = tm.n_cols
-        if d.get("applies") == "run" and not run_events:
+        if tm.applies == "run" and not run_events:  # the kind decides, not the document
             skipped.append({"effect": d.get("effect"), "kind": tm.kind,
                             "why": "a run event of the calibration run (pass run events "
                                    "to apply it)"})

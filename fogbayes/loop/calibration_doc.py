@@ -17,34 +17,14 @@ import math
 import re
 
 from ..data.doc_models import _scan
+from ..diagnose.kinds import KINDS
 from ..data.doc_rules import (COEF_LIMIT, LOOP_SCHEMA, LOOP_SCHEMA_NAME, LOOP_SCHEMA_VERSION,
                               MAX_ORDER, FitDocumentError, _Checker, _kind, is_loop_document)
 
-__all__ = ["TERM_PARAMS", "is_loop_document", "match_channels", "validate_loop_document"]
+__all__ = ["is_loop_document", "match_channels", "validate_loop_document"]
 
 FIX = "pass the document written by 'fogbayes loop --json' unchanged, or run the loop again"
 
-#: Parameters each term kind needs: "pos" positive number, "num" finite number, "int"
-#: channel index, "powers" list of exponents.
-TERM_PARAMS: dict[str, dict[str, str]] = {
-    "intercept": {},
-    "tpoly": {"channel": "int", "powers": "powers", "centre": "num", "scale": "pos"},
-    "rate": {"scale": "pos"},
-    "rate_poly": {"powers": "powers", "scale": "pos"},
-    "gradient": {"a": "int", "b": "int", "scale": "pos"},
-    "hysteresis": {"r0": "pos"},
-    "lag": {"channel": "int", "tau": "pos", "centre": "num", "scale": "pos"},
-    "drift_lin": {"duration": "pos"},
-    "drift_exp": {"tau": "pos"},
-    "periodic": {"frequency": "pos"},
-    "step": {"time": "num"},
-    "omega_poly": {"powers": "powers", "scale": "pos"},
-    "omega_abs": {"scale": "pos"},
-    "omega_tpoly": {"channel": "int", "powers": "powers", "centre": "num", "t_scale": "pos",
-                    "scale": "pos"},
-    "drift_tpoly": {"channel": "int", "powers": "powers", "centre": "num", "scale": "pos",
-                    "duration": "pos"},
-}
 _CHANNEL_KEYS = ("channel", "a", "b")
 
 
@@ -91,13 +71,13 @@ def _terms(cal: dict, v: _Checker, n_channels: int) -> int:
         if not isinstance(d, dict):
             v.fail(at, f"is a {_kind(d)}, not an object")
         kind = v.get(d, "kind", str, path=f"{at}.kind")
-        if kind not in TERM_PARAMS:
+        if kind not in KINDS:
             v.fail(f"{at}.kind", f"unknown term kind {kind!r} (written by a newer fogbayes, "
                                  "or edited)", fix="upgrade fogbayes, or run the loop again")
         if d.get("applies", "sensor") not in ("sensor", "run"):
             v.fail(f"{at}.applies", f"{d.get('applies')!r} is neither 'sensor' nor 'run'")
         params = v.get(d, "params", dict, path=f"{at}.params")
-        for key, rule in TERM_PARAMS[kind].items():
+        for key, rule in KINDS[kind].needs.items():
             pk = f"{at}.params.{key}"
             if key not in params:
                 v.fail(pk, "missing")
@@ -117,8 +97,7 @@ def _terms(cal: dict, v: _Checker, n_channels: int) -> int:
             w = params["wpower"]
             if isinstance(w, bool) or not isinstance(w, int) or not 1 <= w <= MAX_ORDER:
                 v.fail(f"{at}.params.wpower", f"must be an integer 1..{MAX_ORDER}")
-        n_cols += (len(params["powers"]) if "powers" in TERM_PARAMS[kind]
-                   else 2 if kind == "periodic" else 1)
+        n_cols += KINDS[kind].n_cols(params)
     return n_cols
 
 

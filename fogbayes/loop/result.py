@@ -77,10 +77,10 @@ class LoopResult(NamedTuple):
         steps = [{"effect": s.effect, "covariates": list(s.covariates), "detail": s.detail,
                   "evidence": s.evidence, "rms_before": s.rms_before, "rms_after": s.rms_after}
                  for s in self.steps]
-        from .calibration import LOOP_SCHEMA
+        from ..data.doc_rules import LOOP_SCHEMA
 
-        doc = {"schema": LOOP_SCHEMA, "model": self.model, "initial": m(self.initial), "steps": steps,
-               "final": m(self.final), "unexplained": self.unexplained}
+        doc = {"schema": LOOP_SCHEMA, "model": self.model, "initial": m(self.initial),
+               "steps": steps, "final": m(self.final), "unexplained": self.unexplained}
         if self.noise_prior is not None:  # an assumption every number above depends on
             doc["noise_prior"] = self.noise_prior.to_json(self.context.grid.dt)
         if self.calibration is not None:

@@ -21,7 +21,6 @@ import math
 from typing import NamedTuple, Sequence
 
 import numpy as np
-from scipy import signal
 
 from ._checks import SimulationParameterError, positive, positive_int
 
@@ -122,27 +121,15 @@ def chamber_temperature(t: np.ndarray, segments: Sequence, *, start: float) -> n
 
 def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
                     initial: float | None = None) -> np.ndarray:
-    """Response of tau dy/dt = u - y on a uniform grid, exact for u linear between samples.
+    """Response of tau dy/dt = u - y, exact for u linear between samples
+    (:func:`fogbayes.diagnose.lag.first_order_lag`, the loop's own lag filter).
 
     ``initial`` is y at t[0] (default u[0]: the sensor starts in equilibrium). tau = 0
     returns u itself.
     """
-    t, u = np.asarray(t, dtype=float), np.asarray(u, dtype=float)
-    tau = positive(tau, "tau", allow_zero=True)
-    if tau == 0.0 or u.size < 2:
-        return u.copy()
-    h = float(t[1] - t[0])
-    dt = np.diff(t)
-    if np.any(np.abs(dt - h) > 1e-9 * max(h, 1.0)):
-        raise SimulationParameterError("first_order_lag needs uniformly spaced time stamps",
-                                       column="time", fix="use time_grid(duration, fs)")
-    a = math.exp(-h / tau)
-    c = -tau * math.expm1(-h / tau) / h  # tau (1 - a) / h without cancellation
-    y0 = u[0] if initial is None else float(initial)
-    b = [1.0 - c, c - a]
-    # lfilter's state z: y0 = b0 u0 + z  =>  z = y0 - b0 u0
-    y, _ = signal.lfilter(b, [1.0, -a], u, zi=[y0 - b[0] * u[0]])
-    return y
+    from ..diagnose.lag import first_order_lag as lag
+
+    return lag(t, u, positive(tau, "tau", allow_zero=True), initial=initial)
 
 
 def thermal_profile(segments: Sequence, *, fs: float, start: float,

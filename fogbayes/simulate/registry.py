@@ -4,6 +4,13 @@
 true covariates (:class:`~fogbayes.simulate.truth.Covariates`). The names are those the
 closed loop knows (docs/DESIGN.md); ``markov_noise`` is the one stochastic effect and is drawn
 by the scenario with its own seed stream.
+
+Every effect the loop can find is planted through the loop's own term kinds
+(:mod:`fogbayes.diagnose.kinds`): ``EffectSpec.terms(params)`` gives (term, coefficients)
+pairs in physical units, e.g. the Shupe term k dT/dt is ``(rate{scale: 1}, [k])``, so truth
+and model share one definition of each column. Their closed forms
+(:mod:`fogbayes.simulate.effects`) are the independent reference the tests compare with.
+Paper 004's bias is its paper's closed form.
 """
 
 from __future__ import annotations
@@ -12,15 +19,57 @@ from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
+from ..diagnose.covariates import Covariates as TermCovariates
+from ..diagnose.terms import Term, design
 from . import effects as fx
 from ._checks import SimulationParameterError
 from .truth import Covariates
+
+Planted = list[tuple[Term, list[float]]]
 
 
 class EffectSpec(NamedTuple):
     fn: Callable[[Covariates, dict], np.ndarray] | None  # None: stochastic (markov_noise)
     defaults: dict[str, Any]
     description: str
+    terms: Callable[[dict], Planted] | None = None  # the effect as loop terms (module doc)
+
+
+def term_covariates(c: Covariates) -> TermCovariates:
+    """The simulator's true covariates as the loop's term covariates (same clock)."""
+    names = tuple(f"T{j + 1}" for j in range(c.temperatures.shape[1]))
+    return TermCovariates(np.asarray(c.time, float), np.asarray(c.temperatures, float), names,
+                          np.asarray(c.dTdt, float), c.input_rate,
+                          float(c.time[-1] - c.time[0]), c.operating_time)
+
+
+def _planted(terms: Callable[[dict], Planted],
+             check=None) -> Callable[[Covariates, dict], np.ndarray]:
+    """An effect's rate from its terms: sum_j X_j(cov) c_j (deg/h)."""
+    def fn(c: Covariates, p: dict) -> np.ndarray:
+        if check is not None:
+            check(c)
+        pairs = terms(p)
+        X = design([t for t, _ in pairs], term_covariates(c))
+        return X @ np.concatenate([np.asarray(k, float) for _, k in pairs])
+    return fn
+
+
+def _effect(terms: Callable[[dict], Planted], defaults: dict, description: str,
+            check=None) -> EffectSpec:
+    return EffectSpec(_planted(terms, check), defaults, description, terms)
+
+
+def _periodic(p: dict) -> Planted:
+    a, ph = p["amplitude"], p["phase"]  # A sin(wt + ph) = A cos(ph) sin(wt) + A sin(ph) cos(wt)
+    return [(Term("periodic", {"frequency": p["frequency"]}),
+             [a * np.cos(ph), a * np.sin(ph)])]
+
+
+def _drift(p: dict) -> Planted:  # s t / 3600 + A (1 - exp(-t / tau))
+    return [(Term("drift_lin", {"duration": 3600.0}), [p["slope"]]),
+            (Term("intercept", {}), [p["amplitude"]]),
+            (Term("drift_exp", {"tau": p["tau"]}), [-p["amplitude"]])]
 
 
 def _omega(cov: Covariates, name: str) -> np.ndarray:
@@ -40,43 +89,51 @@ def _second(cov: Covariates, name: str) -> np.ndarray:
 
 
 EFFECTS: dict[str, EffectSpec] = {
-    "temperature_order": EffectSpec(
-        lambda c, p: fx.temperature_order(c.temperature, **p),
+    "temperature_order": _effect(
+        lambda p: [(Term("tpoly", {"channel": 0, "powers": list(range(len(p["coeffs"]))),
+                                   "centre": p["T_ref"], "scale": 1.0}), list(p["coeffs"]))],
         {"coeffs": [0.0, 0.0, 0.0, 2e-6], "T_ref": 20.0},
         "bias polynomial in temperature, sum_i c_i (T - T_ref)^i (deg/h)"),
-    "temperature_rate": EffectSpec(
-        lambda c, p: fx.temperature_rate(c.dTdt, **p), {"coeff": 0.3},
+    "temperature_rate": _effect(
+        lambda p: [(Term("rate", {"scale": 1.0}), [p["coeff"]])], {"coeff": 0.3},
         "Shupe term k dT/dt (deg/h per deg C/min)"),
-    "temperature_gradient": EffectSpec(
-        lambda c, p: fx.temperature_gradient(c.temperature, _second(c, "temperature_gradient"), **p),
-        {"coeff": 0.03}, "k (T2 - T1) between the two channels (deg/h per deg C)"),
-    "thermal_hysteresis": EffectSpec(
-        lambda c, p: fx.thermal_hysteresis(c.dTdt, **p), {"size": 0.2, "rate_scale": 0.05},
+    "temperature_gradient": _effect(
+        lambda p: [(Term("gradient", {"a": 0, "b": 1, "scale": 1.0}), [p["coeff"]])],
+        {"coeff": 0.03}, "k (T2 - T1) between the two channels (deg/h per deg C)",
+        check=lambda c: _second(c, "temperature_gradient")),
+    "thermal_hysteresis": _effect(
+        lambda p: [(Term("hysteresis", {"r0": p["rate_scale"]}), [0.5 * p["size"]])],
+        {"size": 0.2, "rate_scale": 0.05},
         "(h/2) tanh(dT/dt / r0): bias h higher heating than cooling (deg/h)"),
-    "thermal_lag": EffectSpec(
-        lambda c, p: fx.thermal_lag(c.time, c.temperature, **p),
+    "thermal_lag": _effect(
+        lambda p: [(Term("lag", {"channel": 0, "tau": p["tau"], "centre": p["T_ref"],
+                                 "scale": 1.0}), [p["coeff"]])],
         {"coeff": 0.01, "tau": 1800.0, "T_ref": 20.0},
         "k (T_lag - T_ref), T_lag = T through a first-order lag tau (s)"),
-    "time_drift": EffectSpec(
-        lambda c, p: fx.time_drift(c.time, **p), {"slope": 0.0, "amplitude": 1.0, "tau": 5400.0},
+    "time_drift": _effect(
+        _drift, {"slope": 0.0, "amplitude": 1.0, "tau": 5400.0},
         "s t/3600 + A (1 - exp(-t/tau)): drift and warm-up (deg/h)"),
-    "periodic": EffectSpec(
-        lambda c, p: fx.periodic(c.time, **p),
-        {"amplitude": 0.1, "frequency": 1.0 / 600.0, "phase": 0.0},
+    "periodic": _effect(
+        _periodic, {"amplitude": 0.1, "frequency": 1.0 / 600.0, "phase": 0.0},
         "A sin(2 pi f t + phase) (deg/h, Hz)"),
-    "step": EffectSpec(
-        lambda c, p: fx.step(c.time, **p), {"time": None, "size": 0.2},
+    "step": _effect(
+        lambda p: [(Term("step", {"time": p["time"]}), [p["size"]])], {"time": None, "size": 0.2},
         "bias step of `size` deg/h at `time` s (default: mid-record)"),
-    "scale_factor_nonlinearity": EffectSpec(
-        lambda c, p: fx.scale_factor_nonlinearity(_omega(c, "scale_factor_nonlinearity"), **p),
-        {"k2": 1e-6, "k3": 1e-8}, "3600 (k2 w^2 + k3 w^3) deg/h, w in deg/s"),
-    "scale_factor_asymmetry": EffectSpec(
-        lambda c, p: fx.scale_factor_asymmetry(_omega(c, "scale_factor_asymmetry"), **p),
-        {"asymmetry": 1e-4}, "1800 a |w| deg/h: scale (1 +- a/2) for w > 0 / w < 0"),
-    "scale_factor_temperature": EffectSpec(
-        lambda c, p: fx.scale_factor_temperature(_omega(c, "scale_factor_temperature"),
-                                                 c.temperature, **p),
-        {"coeff": 1e-6, "T_ref": 20.0}, "3600 w k (T - T_ref) deg/h: scale linear in T"),
+    "scale_factor_nonlinearity": _effect(
+        lambda p: [(Term("omega_poly", {"powers": [2, 3], "scale": 1.0}),
+                    [3600.0 * p["k2"], 3600.0 * p["k3"]])],
+        {"k2": 1e-6, "k3": 1e-8}, "3600 (k2 w^2 + k3 w^3) deg/h, w in deg/s",
+        check=lambda c: _omega(c, "scale_factor_nonlinearity")),
+    "scale_factor_asymmetry": _effect(
+        lambda p: [(Term("omega_abs", {"scale": 1.0}), [1800.0 * p["asymmetry"]])],
+        {"asymmetry": 1e-4}, "1800 a |w| deg/h: scale (1 +- a/2) for w > 0 / w < 0",
+        check=lambda c: _omega(c, "scale_factor_asymmetry")),
+    "scale_factor_temperature": _effect(
+        lambda p: [(Term("omega_tpoly", {"channel": 0, "powers": [1], "centre": p["T_ref"],
+                                         "t_scale": 1.0, "scale": 1.0}),
+                    [3600.0 * p["coeff"]])],
+        {"coeff": 1e-6, "T_ref": 20.0}, "3600 w k (T - T_ref) deg/h: scale linear in T",
+        check=lambda c: _omega(c, "scale_factor_temperature")),
     "markov_noise": EffectSpec(
         None, {"sigma": 0.05, "tau_c": 300.0},
         "first-order Gauss-Markov noise, std sigma deg/h, correlation time tau_c s"),

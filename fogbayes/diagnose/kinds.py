@@ -1,0 +1,276 @@
+"""One definition per term kind: its columns, labels, physical description and whether it
+describes the sensor or the run.
+
+Every model term -- of a base model, a loop candidate, a calibration applied to a new run,
+or an effect the simulator plants -- is a :class:`~fogbayes.diagnose.terms.Term`
+(``kind`` + JSON-able ``params``) whose behaviour is the :class:`Kind` registered here under
+``kind``. All columns are centred/scaled to O(1); the coefficient of each is in deg/h::
+
+    intercept     1
+    tpoly         ((T_c - centre) / scale)^k, k in powers            (bias polynomial)
+    rate          (dT/dt) / scale                                    (Shupe, deg C/min)
+    rate_poly     ((dT/dt) / scale)^k                                (paper 004 rate terms)
+    gradient      (T_b - T_a) / scale                                (two channels)
+    hysteresis    tanh((dT/dt) / r0)                                 (+heating / -cooling)
+    lag           (L_tau[T_c] - centre) / scale, tau dL/dt = T - L   (first-order lag)
+    drift_lin     t / duration                                       (run event)
+    drift_exp     exp(-t / tau)                                      (warm-up since power-on)
+    periodic      sin(2 pi f t), cos(2 pi f t)                       (run event)
+    step          1[t >= time]                                       (run event)
+    omega_poly    (W / scale)^k                                      (rate table)
+    omega_abs     |W| / scale
+    omega_tpoly   (W / scale)^m ((T - centre) / t_scale)^k           (m = wpower, default 1)
+    drift_tpoly   (t_op / duration) ((T - centre) / scale)^k         (paper 000's U1(T) t)
+
+``applies``: ``"sensor"`` for a property of the sensor (carried to a new run by a
+calibration), ``"run"`` for an event of one run's own clock (a step, a drift across the run,
+a periodic disturbance with that run's phase).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .lag import first_order_lag
+
+
+def _channel(cov, name) -> np.ndarray:
+    if isinstance(name, (int, np.integer)):
+        return cov.T[:, int(name)]
+    return cov.T[:, cov.names.index(name)]
+
+
+def _z(cov, p) -> np.ndarray:
+    return (_channel(cov, p["channel"]) - p["centre"]) / p["scale"]
+
+
+def _coef(beta, se, factor: float = 1.0) -> dict[str, float]:
+    return {"value": float(beta * factor), "stderr": float(se * abs(factor))}
+
+
+class Kind:
+    """A term kind: subclasses set ``name`` and override :meth:`columns` (and what differs)."""
+
+    name: str = ""
+    applies: str = "sensor"
+    powered: bool = False  # one column per entry of params["powers"]
+    #: parameters the columns need: "pos" positive number (a divisor), "num" finite
+    #: number, "int" temperature-channel index, "powers" list of exponents
+    needs: dict[str, str] = {}
+
+    def n_cols(self, p: dict) -> int:
+        return len(p["powers"]) if self.powered else 1
+
+    def columns(self, p: dict, cov) -> np.ndarray:
+        raise NotImplementedError
+
+    def labels(self, p: dict) -> list[str]:
+        return [self.name]
+
+    def describe(self, p: dict, beta, se, t0: float) -> dict[str, Any]:
+        """Physical reading of the fitted coefficients (deg/h and the driver's own unit)."""
+        return {"coefficients_scaled": {lab: _coef(b, s) for lab, b, s in
+                                        zip(self.labels(p), beta, se)},
+                "scaling": {k: v for k, v in p.items() if k != "effect"}}
+
+
+class Intercept(Kind):
+    name = "intercept"
+    needs = {}
+
+    def columns(self, p, cov):
+        return np.ones((cov.t.size, 1))
+
+
+class TPoly(Kind):
+    name, powered = "tpoly", True
+    needs = {"channel": "int", "powers": "powers", "centre": "num", "scale": "pos"}
+
+    def columns(self, p, cov):
+        z = _z(cov, p)
+        return np.column_stack([z ** e for e in p["powers"]])
+
+    def labels(self, p):
+        return [f"T'^{e}" for e in p["powers"]]
+
+
+class Rate(Kind):
+    name = "rate"
+    needs = {"scale": "pos"}
+
+    def columns(self, p, cov):
+        return (cov.Tdot / p["scale"])[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"coefficient_deg_h_per_degC_per_min": _coef(beta[0], se[0], 1.0 / p["scale"])}
+
+
+class RatePoly(Kind):
+    name, powered = "rate_poly", True
+    needs = {"powers": "powers", "scale": "pos"}
+
+    def columns(self, p, cov):
+        z = cov.Tdot / p["scale"]
+        return np.column_stack([z ** e for e in p["powers"]])
+
+    def labels(self, p):
+        return [f"(dT/dt)'^{e}" for e in p["powers"]]
+
+
+class Gradient(Kind):
+    name = "gradient"
+    needs = {"a": "int", "b": "int", "scale": "pos"}
+
+    def columns(self, p, cov):
+        return ((_channel(cov, p["b"]) - _channel(cov, p["a"])) / p["scale"])[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"channels": [p["a"], p["b"]],
+                "coefficient_deg_h_per_degC": _coef(beta[0], se[0], 1.0 / p["scale"])}
+
+
+class Hysteresis(Kind):
+    name = "hysteresis"
+    needs = {"r0": "pos"}
+
+    def columns(self, p, cov):
+        return np.tanh(cov.Tdot / p["r0"])[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"r0_degC_per_min": p["r0"], "form": "(h/2) tanh(dT/dt / r0)",
+                "heating_minus_cooling_deg_h": _coef(beta[0], se[0], 2.0)}
+
+
+class Lag(Kind):
+    name = "lag"
+    needs = {"channel": "int", "tau": "pos", "centre": "num", "scale": "pos"}
+
+    def columns(self, p, cov):
+        L = first_order_lag(cov.t, _channel(cov, p["channel"]), p["tau"])
+        return ((L - p["centre"]) / p["scale"])[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"tau_s": p["tau"], "channel": p["channel"],
+                "coefficient_deg_h_per_degC": _coef(beta[0], se[0], 1.0 / p["scale"])}
+
+
+class DriftLin(Kind):
+    name, applies = "drift_lin", "run"
+    needs = {"duration": "pos"}
+
+    def columns(self, p, cov):
+        return (cov.t / p["duration"])[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"form": "linear",
+                "slope_deg_h_per_h": _coef(beta[0], se[0], 3600.0 / p["duration"])}
+
+
+class DriftExp(Kind):
+    name = "drift_exp"  # a warm-up since power-on (the first sample): a sensor property
+    needs = {"tau": "pos"}
+
+    def columns(self, p, cov):
+        return np.exp(-cov.t / p["tau"])[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"form": "warm-up A (1 - exp(-t / tau))", "tau_s": p["tau"],
+                "amplitude_deg_h": _coef(beta[0], se[0], -1.0)}
+
+
+class Periodic(Kind):
+    name, applies = "periodic", "run"
+    needs = {"frequency": "pos"}
+
+    def n_cols(self, p):
+        return 2
+
+    def columns(self, p, cov):
+        ph = 2.0 * np.pi * p["frequency"] * cov.t
+        return np.column_stack([np.sin(ph), np.cos(ph)])
+
+    def labels(self, p):
+        return ["sin", "cos"]
+
+    def describe(self, p, beta, se, t0):
+        a, b = float(beta[0]), float(beta[1])
+        return {"frequency_hz": p["frequency"], "period_s": 1.0 / p["frequency"],
+                "amplitude_deg_h": {"value": math.hypot(a, b),
+                                    "stderr": float(np.sqrt(np.mean(np.asarray(se) ** 2)))},
+                "phase_rad": math.atan2(b, a)}
+
+
+class Step(Kind):
+    name, applies = "step", "run"
+    needs = {"time": "num"}
+
+    def columns(self, p, cov):
+        return (cov.t >= p["time"]).astype(float)[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"time_s": p["time"] + t0, "time_from_start_s": p["time"],
+                "size_deg_h": _coef(beta[0], se[0])}
+
+
+class OmegaPoly(Kind):
+    name, powered = "omega_poly", True
+    needs = {"powers": "powers", "scale": "pos"}
+
+    def columns(self, p, cov):
+        z = cov.omega / p["scale"]
+        return np.column_stack([z ** e for e in p["powers"]])
+
+    def labels(self, p):
+        return [f"W'^{e}" for e in p["powers"]]
+
+
+class OmegaAbs(Kind):
+    name = "omega_abs"
+    needs = {"scale": "pos"}
+
+    def columns(self, p, cov):
+        return (np.abs(cov.omega) / p["scale"])[:, None]
+
+
+class OmegaTPoly(Kind):
+    name, powered = "omega_tpoly", True
+    needs = {"channel": "int", "powers": "powers", "centre": "num", "t_scale": "pos",
+             "scale": "pos"}
+
+    def columns(self, p, cov):
+        z = (_channel(cov, p["channel"]) - p["centre"]) / p["t_scale"]
+        wz = (cov.omega / p["scale"]) ** p.get("wpower", 1)
+        return np.column_stack([wz * z ** e for e in p["powers"]])
+
+    def labels(self, p):
+        return [f"W' T'^{e}" for e in p["powers"]]
+
+
+class DriftTPoly(Kind):
+    name, powered = "drift_tpoly", True
+    needs = {"channel": "int", "powers": "powers", "centre": "num", "scale": "pos",
+             "duration": "pos"}
+
+    def columns(self, p, cov):  # U1(T) t with t the operating time when the run has one
+        tt = cov.op_time if cov.op_time is not None else cov.t
+        z = _z(cov, p)
+        return np.column_stack([tt / p["duration"] * z ** e for e in p["powers"]])
+
+    def labels(self, p):
+        return [f"t' T'^{e}" for e in p["powers"]]
+
+
+KINDS: dict[str, Kind] = {k.name: k() for k in (
+    Intercept, TPoly, Rate, RatePoly, Gradient, Hysteresis, Lag, DriftLin, DriftExp, Periodic,
+    Step, OmegaPoly, OmegaAbs, OmegaTPoly, DriftTPoly)}
+
+
+def kind_of(name: str) -> Kind:
+    """The :class:`Kind` registered as ``name`` (ValueError naming it otherwise)."""
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise ValueError(f"unknown term kind {name!r}") from None
