@@ -12,9 +12,11 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax.numpy as jnp
+import math
+
 import numpy as np
-from jax.scipy.special import digamma, polygamma
+
+from .._xp import namespace, special
 
 from ..errors import TooShortError
 from ..models.allan import POWERS, TERMS, _A_PER_P2, avar, noise_scales
@@ -72,16 +74,19 @@ def _prior_loc(tau: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 def log_moments(nu):
     """Mean offset and variance of log(chi2_nu / nu): digamma(nu/2) - log(nu/2), trigamma."""
-    return digamma(nu / 2) - jnp.log(nu / 2), polygamma(1, nu / 2)
+    xp = namespace(nu)
+    sp = special(xp)
+    return sp.digamma(nu / 2) - xp.log(nu / 2), sp.polygamma(1, nu / 2)
 
 
 def cube_root_normal(obs, mean, nu):
     """Wilson-Hilferty: z = ((x)^(1/3) - (1 - 2/(9 nu))) / sqrt(2/(9 nu)), x = obs / mean, is
     ~N(0, 1) when obs ~ mean chi2_nu / nu; also returns log dz/dobs (the Jacobian)."""
+    xp = namespace(obs, mean, nu)
     x = obs / mean
     v = 2.0 / (9.0 * nu)
-    z = (jnp.cbrt(x) - (1.0 - v)) / jnp.sqrt(v)
-    log_jac = -jnp.log(3.0) - (2.0 / 3.0) * jnp.log(x) - 0.5 * jnp.log(v) - jnp.log(mean)
+    z = (xp.cbrt(x) - (1.0 - v)) / xp.sqrt(v)
+    log_jac = -math.log(3.0) - (2.0 / 3.0) * xp.log(x) - 0.5 * xp.log(v) - xp.log(mean)
     return z, log_jac
 
 
@@ -94,15 +99,16 @@ def model_moments(logp, mask, data: AllanFitData, delta: float = 0.0):
     Returns:
         ``(mean (K,), nu (K,), corr (K, K))``.
     """
-    p = jnp.exp(logp) * mask
+    xp = namespace(logp, mask, delta)
+    p = xp.exp(logp) * mask
     mean = avar(p, data.tau)
     ramp = p[4] / 3600.0 / data.fs  # R_s per sample: rate change between two samples
     mean_d, cov = mixture_moments(data.tensors, noise_scales(p, data.fs), ramp)
-    counts = jnp.asarray(data.counts)
+    counts = xp.asarray(data.counts, dtype=float)
     # relative covariance; the floor keeps the EDF below ~100 x the number of terms
-    rel = cov / jnp.outer(mean_d, mean_d) + jnp.diag(2.0 / (100.0 * counts))
-    var = jnp.diag(rel)
+    rel = cov / xp.outer(mean_d, mean_d) + xp.diag(2.0 / (100.0 * counts))
+    var = xp.diag(rel)
     nu = 2.0 / (var + delta**2)  # Var(log estimate) ~ 2 / nu + delta^2
-    corr = (rel + jnp.eye(len(var)) * delta**2) / jnp.sqrt(
-        jnp.outer(var + delta**2, var + delta**2))
+    corr = (rel + xp.eye(len(var)) * delta**2) / xp.sqrt(
+        xp.outer(var + delta**2, var + delta**2))
     return mean, nu, corr

@@ -1,4 +1,4 @@
-r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS with optax.
+r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS.
 
 * :func:`fit_paper_lsq` — paper 002's method: least squares of
   :math:`\hat\sigma^2(\tau) = \sum_n a_n \tau^n` (non-negative :math:`a_n = C_n^2`, relative
@@ -12,7 +12,8 @@ r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS
   \log\sigma^2_j(\theta) - b_j`, with :math:`b_j = \psi(\nu_j/2) - \log(\nu_j/2)` the mean of
   :math:`\log(\chi^2_\nu/\nu)` and :math:`V` its covariance (trigamma variances, correlations of
   the estimates from :mod:`fogbayes.stats.allan_cov`), recomputed at the estimate for 3 passes;
-  optax L-BFGS inside one ``lax.scan``. A weak normal penalty (sd 10 in log) keeps terms that
+  Gauss-Newton with a trust region on the whitened residuals (SciPy, NumPy: five
+  parameters and ~20 taus, no compilation). A weak normal penalty (sd 10 in log) keeps terms that
   are absent from running to zero. Intervals: :math:`\exp(\hat\theta \pm 1.645\,se)` with the
   Gauss-Newton covariance :math:`(J^\top V^{-1} J)^{-1}`; the lower bound is 0 when dropping
   the term raises the GLS chi-square by less than 2.71 (profile likelihood, 90 %).
@@ -24,22 +25,19 @@ Both return :class:`AllanFit` with values in the canonical units of
 
 from __future__ import annotations
 
-from functools import partial
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize, special
 
 from ..models.allan import (
     _A_PER_P2, POWERS, TERMS, UNITS, AllanParams, params_from_coefficients,
 )
+from ..stats.edf import chi2_ppf
 from .allan_data import AllanFitData, log_moments, model_moments, restrict
-from .lsq import lbfgs_scan
 
-Z90 = float(stats.norm.ppf(0.95))
-CHI2_90 = float(stats.chi2.ppf(0.9, 1))
+Z90 = float(special.ndtri(0.95))
+CHI2_90 = float(chi2_ppf(0.9, 1))
 GOF_LEVEL = 1e-3
 _PENALTY_SD = 10.0
 _STEPS = 200
@@ -95,44 +93,69 @@ def fit_paper_lsq(data: AllanFitData, terms=TERMS) -> AllanFit:
                     {"C": np.sqrt(a), "a": a, "rms_relative_residual": float(np.sqrt(np.mean(resid**2)))})
 
 
-# -- GLS in log space with optax ---------------------------------------------------------
+# -- GLS in log space (NumPy, SciPy's trust-region least squares) ---------------------------
+_POWERS = np.array([POWERS[t] for t in TERMS], dtype=float)
+_A = np.array([_A_PER_P2[t] for t in TERMS])
+
+
 def _log_model(logp, mask, tau):
-    p2 = jnp.exp(2 * logp) * mask
-    a = jnp.stack([_A_PER_P2[t] * p2[i] for i, t in enumerate(TERMS)])
-    powers = jnp.array([POWERS[t] for t in TERMS], dtype=float)
-    return jnp.log(jnp.sum(a[:, None] * tau[None, :] ** powers[:, None], axis=0))
+    """log sigma^2(tau) of the five-term model at log-parameters ``logp`` (terms in ``mask``)."""
+    return np.log(_term_parts(logp, mask, tau).sum(axis=0))
 
 
-def _loss(logp, mask, tau, target, prec, loc):
-    r = target - _log_model(logp, mask, tau)
-    pen = jnp.sum(mask * ((logp - loc) / _PENALTY_SD) ** 2)
-    return 0.5 * r @ prec @ r + 0.5 * pen
+def _term_parts(logp, mask, tau):
+    return (_A * np.exp(2.0 * np.asarray(logp)) * mask)[:, None] * \
+        np.asarray(tau)[None, :] ** _POWERS[:, None]
 
 
-@partial(jax.jit, static_argnames=("steps",))
-def _minimise(logp0, mask, tau, target, prec, loc, steps: int = _STEPS):
-    """L-BFGS in one lax.scan; returns the parameters, loss trace and final gradient norm."""
-    fun = partial(_loss, mask=mask, tau=tau, target=target, prec=prec, loc=loc)
-    x, trace = lbfgs_scan(fun, logp0, steps=steps)
-    return x, trace, jnp.linalg.norm(jax.grad(fun)(x) * mask)
+def _log_model_jacobian(logp, mask, tau):
+    """d log sigma^2(tau_j) / d logp_i = 2 a_i p_i^2 tau_j^n_i / sigma^2(tau_j), (K, 5)."""
+    parts = _term_parts(logp, mask, tau)
+    return (2.0 * parts / parts.sum(axis=0)).T
 
 
-@jax.jit
-def _log_weights(logp, mask, data: AllanFitData):
-    """b, Var and correlation of the log estimates: one compiled program (run op by op,
-    its ~60 small JAX operations compiled one program each, ~6 s of a CLI call)."""
-    _, nu, corr = model_moments(logp, mask, data)
-    b, v = log_moments(nu)
-    return b, v, corr
+def _whitener(prec):
+    """W with W^T W = prec (prec symmetric positive semi-definite: zero rows allowed)."""
+    vals, vecs = np.linalg.eigh(0.5 * (prec + prec.T))
+    return (vecs * np.sqrt(np.clip(vals, 0.0, None))).T
+
+
+def _minimise(logp0, mask, tau, target, prec, loc):
+    """argmin 1/2 r' P r + 1/2 sum_on ((logp - loc) / sd)^2, r = target - log model:
+    Gauss-Newton with a trust region (``scipy.optimize.least_squares``) on the whitened
+    residuals, only the terms in ``mask`` free. Returns (logp, loss, gradient norm)."""
+    on = np.asarray(mask) > 0
+    W = _whitener(np.asarray(prec))
+    x = np.array(logp0, dtype=float)
+
+    def full(v):
+        y = x.copy()
+        y[on] = v
+        return y
+
+    def resid(v):
+        lp = full(v)
+        return np.concatenate([W @ (target - _log_model(lp, mask, tau)),
+                               (v - loc[on]) / _PENALTY_SD])
+
+    def jac(v):
+        J = _log_model_jacobian(full(v), mask, tau)[:, on]
+        return np.vstack([-W @ J, np.eye(int(on.sum())) / _PENALTY_SD])
+
+    if not on.any():
+        return x, 0.0, 0.0
+    sol = optimize.least_squares(resid, x[on], jac=jac, method="trf", xtol=1e-12,
+                                 ftol=1e-12, gtol=1e-10, max_nfev=_STEPS)
+    return full(sol.x), float(sol.cost), float(np.linalg.norm(sol.grad))
 
 
 def _gls_weights(logp, mask, data, keep):
     """Target offset b and precision of the log estimates at the current parameters; taus
-    outside ``keep`` get zero rows and columns (the precision of the kept ones' marginal), so
-    every subset has the same array shapes and the minimiser compiles once."""
-    b, v, corr = _log_weights(jnp.asarray(logp), jnp.asarray(mask), data)
-    sd = np.sqrt(np.asarray(v))
-    cov = np.asarray(corr) * np.outer(sd, sd)
+    outside ``keep`` get zero rows and columns (the precision of the kept ones' marginal)."""
+    _, nu, corr = model_moments(np.asarray(logp, float), np.asarray(mask, float), data)
+    b, v = log_moments(nu)
+    sd = np.sqrt(v)
+    cov = corr * np.outer(sd, sd)
     prec = np.zeros_like(cov)
     prec[np.ix_(keep, keep)] = np.linalg.inv(cov[np.ix_(keep, keep)])
     return np.asarray(b), prec
@@ -150,7 +173,7 @@ def upper_caps(data: AllanFitData, keep) -> np.ndarray:
     """Largest value of each term that stays below every kept AVAR estimate's one-sided
     99.9 % upper bound on its own: no interval needs to reach beyond it (it only stops the
     log-space bounds of unresolved terms at absurd values)."""
-    hi = data.edf * data.avar / stats.chi2.ppf(0.001, data.edf)
+    hi = data.edf * data.avar / chi2_ppf(0.001, data.edf)
     return np.array([np.min(np.sqrt(hi[keep] / (_A_PER_P2[t] * data.tau[keep] ** POWERS[t])))
                      for t in TERMS])
 
@@ -167,24 +190,21 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     mask = _mask(terms)
     keep = np.ones(data.tau.size, bool) if keep is None else np.asarray(keep, bool)
     logp = initial_logp(data, mask)
-    tau, loc = jnp.asarray(data.tau), jnp.asarray(data.prior_loc)
+    tau, loc = np.asarray(data.tau, float), np.asarray(data.prior_loc, float)
     log_obs = np.log(data.avar)
     for _ in range(passes):
         b, prec = _gls_weights(logp, mask, data, keep)
-        x, trace, gnorm = _minimise(jnp.asarray(logp), jnp.asarray(mask), tau,
-                                    jnp.asarray(log_obs - b), jnp.asarray(prec), loc)
-        logp = np.asarray(x)
+        logp, loss, gnorm = _minimise(logp, mask, tau, log_obs - b, prec, loc)
     b, prec = _gls_weights(logp, mask, data, keep)
-    J = np.asarray(_log_model_jacobian(jnp.asarray(logp), jnp.asarray(mask), tau))
+    J = _log_model_jacobian(logp, mask, tau)
     on = mask > 0
     Jm = J[:, on]
     info_mat = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / _PENALTY_SD**2
     se = np.zeros(5)
     se[on] = np.sqrt(np.diag(np.linalg.inv(info_mat)))
     value = np.exp(logp) * mask
-    trace = np.asarray(trace)
-    converged = bool(np.isfinite(trace[-1]) and float(gnorm) < 1e-4 * max(1.0, abs(trace[-1])))
-    target = jnp.asarray(log_obs - b)
+    converged = bool(np.isfinite(loss) and gnorm < 1e-4 * max(1.0, abs(loss)))
+    target = log_obs - b
     chi2 = _chi2(logp, mask, tau, target, prec)
     # Profile-likelihood lower bound: a term whose removal raises chi2 by less than the 90 %
     # point of chi2_1 (2.71) is compatible with 0, and a log-space interval cannot say so.
@@ -192,11 +212,10 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     for i in np.flatnonzero(on):
         sub = mask.copy()
         sub[i] = 0.0
-        x, _, _ = _minimise(jnp.asarray(logp), jnp.asarray(sub), tau, target, jnp.asarray(prec),
-                            loc)
-        d_chi2[i] = _chi2(np.asarray(x), sub, tau, target, prec) - chi2
+        x, _, _ = _minimise(logp, sub, tau, target, prec, loc)
+        d_chi2[i] = _chi2(x, sub, tau, target, prec) - chi2
     dof = max(1, int(keep.sum() - on.sum()))
-    gof_p = float(stats.chi2.sf(chi2, dof))
+    gof_p = float(special.gammaincc(dof / 2.0, chi2 / 2.0))  # chi^2_dof survival
     dispersion = max(1.0, chi2 / dof) if gof_p < GOF_LEVEL else 1.0
     half = Z90 * se * np.sqrt(dispersion)  # quasi-likelihood: a misfit widens every interval
     low = np.where(d_chi2 < CHI2_90 * dispersion, 0.0, np.exp(logp - half))
@@ -204,15 +223,12 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     return AllanFit("wls", _estimates(value, low, high, mask), AllanParams(*value), converged,
                     {"logp": logp, "se_log": se * np.sqrt(dispersion), "chi2": chi2, "dof": dof,
                      "gof_p": gof_p, "dispersion": dispersion, "keep": keep,
-                     "d_chi2_without": dict(zip(TERMS, d_chi2)), "loss_trace": trace})
-
-
-_log_model_jacobian = jax.jit(jax.jacfwd(lambda logp, mask, tau: _log_model(logp, mask, tau)))
-_log_model_jit = jax.jit(lambda logp, mask, tau: _log_model(logp, mask, tau))
+                     "d_chi2_without": dict(zip(TERMS, d_chi2)), "loss": loss,
+                     "gradient_norm": gnorm})
 
 
 def _chi2(logp, mask, tau, target, prec) -> float:
-    r = np.asarray(target) - np.asarray(_log_model_jit(jnp.asarray(logp), jnp.asarray(mask), tau))
+    r = np.asarray(target) - _log_model(logp, mask, tau)
     return float(r @ prec @ r)
 
 

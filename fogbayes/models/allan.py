@@ -1,4 +1,7 @@
-r"""Allan-variance noise models as pure JAX functions of tau (paper 002, table 1; IEEE 952).
+r"""Allan-variance noise models as pure functions of tau (paper 002, table 1; IEEE 952).
+
+NumPy in, NumPy out; JAX in, JAX out (:mod:`fogbayes._xp`): the same functions serve the
+direct fits and the NumPyro posteriors.
 
 Five-term model, sigma in deg/h and tau in s, parameters in canonical units::
 
@@ -31,7 +34,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-import jax.numpy as jnp
+from .._xp import namespace
 
 TERMS = ("Q", "N", "B", "K", "R")
 UNITS = {"Q": "arcsec", "N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h^1.5", "R": "deg/h^2"}
@@ -57,10 +60,12 @@ class AllanParams(NamedTuple):
 
 
 def term_avar(params, tau):
-    """Variance of each term, shape (5, len(tau)) in (deg/h)^2, in the order of TERMS."""
-    tau = jnp.asarray(tau)
-    return jnp.stack([_A_PER_P2[t] * jnp.asarray(p) ** 2 * tau ** POWERS[t]
-                      for t, p in zip(TERMS, params)])
+    """Variance of each term, shape (5, len(tau)) in (deg/h)^2, in the order of TERMS
+    (NumPy in, NumPy out; JAX in, JAX out: :mod:`fogbayes._xp`)."""
+    xp = namespace(params, tau)
+    tau = xp.asarray(tau, dtype=float)
+    return xp.stack([_A_PER_P2[t] * xp.asarray(p, dtype=float) ** 2 * tau ** POWERS[t]
+                     for t, p in zip(TERMS, params)])
 
 
 def avar(params, tau):
@@ -70,17 +75,20 @@ def avar(params, tau):
         >>> float(avar(AllanParams(N=1.0), 3600.0))  # N deg/sqrt(h) reads at tau = 1 h
         1.0
     """
-    return jnp.sum(term_avar(params, tau), axis=0)
+    return term_avar(params, tau).sum(axis=0)
 
 
 def adev(params, tau):
     """Five-term Allan deviation sigma(tau) in deg/h."""
-    return jnp.sqrt(avar(params, tau))
+    v = avar(params, tau)
+    return namespace(v).sqrt(v)
 
 
-def variance_coefficients(params) -> jnp.ndarray:
+def variance_coefficients(params):
     """a_n of sigma^2 = sum_n a_n tau^n (n = -2..2), tau in s, sigma in deg/h."""
-    return jnp.stack([_A_PER_P2[t] * jnp.asarray(p) ** 2 for t, p in zip(TERMS, params)])
+    xp = namespace(params)
+    return xp.stack([_A_PER_P2[t] * xp.asarray(p, dtype=float) ** 2
+                     for t, p in zip(TERMS, params)])
 
 
 def params_from_variance_coefficients(a) -> AllanParams:
@@ -110,29 +118,34 @@ def coefficients_from_params(params) -> tuple[float, ...]:
 
 def markov_avar(tau, *, sigma, tau_c):
     """First-order Gauss-Markov term (paper 002 table 1), sigma deg/h, tau_c s."""
-    tau = jnp.asarray(tau)
+    xp = namespace(tau, sigma, tau_c)
+    tau = xp.asarray(tau, dtype=float)
     x = tau / tau_c
     qt2 = 2.0 * sigma**2 * tau_c  # (q_c T_c)^2 with q_c^2 = 2 sigma^2 / T_c
     # 1 - (3 - 4 e^-x + e^-2x) / (2x), written with expm1 so small x does not cancel
-    inner = 1.0 - (-4.0 * jnp.expm1(-x) + jnp.expm1(-2.0 * x)) / (2.0 * x)
+    inner = 1.0 - (-4.0 * xp.expm1(-x) + xp.expm1(-2.0 * x)) / (2.0 * x)
     return qt2 / tau * inner
 
 
 def sinusoid_avar(tau, *, amplitude, frequency):
     """Sinusoidal rate term Omega_0^2 (sin^2(pi f0 tau) / (pi f0 tau))^2 (IEEE 952 form)."""
-    x = jnp.pi * frequency * jnp.asarray(tau)
-    return amplitude**2 * (jnp.sin(x) ** 2 / x) ** 2
+    xp = namespace(tau, amplitude, frequency)
+    x = math.pi * frequency * xp.asarray(tau, dtype=float)
+    return amplitude**2 * (xp.sin(x) ** 2 / x) ** 2
 
 
 def noise_scales(params, fs: float):
     """Scales of the power-law noises (quantization, white, flicker, rate random walk) in the
     sample units of :mod:`fogbayes.stats.allan_cov`, so that their expected AVARs are the
     Q, N, B and K terms (R, a deterministic ramp, adds to the mean only)."""
-    q, n, b, k = (jnp.asarray(p) for p in tuple(params)[:4])
-    return jnp.stack([q**2 * fs**2, (60.0 * n) ** 2 * fs, b**2 / (2.0 * jnp.pi),
-                      (k / 60.0) ** 2 / fs])
+    xp = namespace(params)
+    q, n, b, k = (xp.asarray(p, dtype=float) for p in tuple(params)[:4])
+    return xp.stack([q**2 * fs**2, (60.0 * n) ** 2 * fs, b**2 / (2.0 * math.pi),
+                     (k / 60.0) ** 2 / fs])
 
 
 def ramp_avar(params, tau):
     """The rate-ramp term alone (deterministic: it shifts the mean, adds no variance)."""
-    return _A_PER_P2["R"] * jnp.asarray(tuple(params)[4]) ** 2 * jnp.asarray(tau) ** 2
+    xp = namespace(params, tau)
+    return _A_PER_P2["R"] * xp.asarray(tuple(params)[4], dtype=float) ** 2 * \
+        xp.asarray(tau, dtype=float) ** 2

@@ -22,17 +22,25 @@ Example:
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
-import jax
+import sys
+
 import numpy as np
 
 from ..errors import FogbayesError, TooShortError
 from .allan_blocked import allan_variance_fast
-from .allan_kernels import KINDS, allan_variance, static_counts
+from .allan_stencils import KINDS, static_counts
 from .edf import chi2_interval, edf_for_kind
 from .noise_id import identify_alphas
 from .taus import cluster_sizes
+
+
+#: From this many samples on, a single record's noise identification runs on a thread
+#: beside the variance computation (below it, the thread's start costs more than it saves).
+PARALLEL_NOISE_ID = 1 << 18
+_NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-noise-id")
 
 
 class AllanDeviation(NamedTuple):
@@ -98,12 +106,18 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
         raise FogbayesError(f"method 'blocked' computes oadev only, not {kind}", column="method",
                             fix="use method='auto' for other kinds")
     ms = _grid(n, taus, kind, per_decade, m_max)
+    # The noise identification does not need the variances: on a long single record it runs
+    # on a second thread while they are computed (both release the GIL).
+    alphas = _NOISE_ID.submit(identify_alphas, y, ms, kind=kind) \
+        if y.ndim == 1 and n >= PARALLEL_NOISE_ID else None
     if kind == "oadev" and method in ("auto", "blocked") and (
-            method == "blocked" or jax.default_backend() == "cpu"):
+            method == "blocked" or _on_cpu()):
         # CPU: the cache-blocked NumPy accumulators (Haar pyramid on octave grids), the
         # same estimator to ~1e-12 and 2-3x faster than the XLA kernels here (allan_blocked)
         var, count = allan_variance_fast(y, ms)
     else:
+        from .allan_kernels import allan_variance
+
         var, count = allan_variance(y, ms, kind=kind, gaps=bool(n_missing),
                                     method="auto" if method == "blocked" else method)
     var, count = np.asarray(var), np.asarray(count)
@@ -114,7 +128,9 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
         var, count, full = var[..., keep], count[..., keep], full[keep]
         if not ms:
             raise TooShortError("every cluster touches a gap", fix="use shorter taus or fill fewer gaps")
-    alpha, edf = _edf(y, ms, count, kind)
+        if alphas is not None:  # identified on the full grid: keep the same taus
+            alphas = _Done(alphas.result()[keep])
+    alpha, edf = _edf(y, ms, count, kind, alphas=None if alphas is None else alphas.result())
     lo, hi = chi2_interval(var, edf, ci)
     excluded = full - count
     note = ("no gaps" if not n_missing else
@@ -123,6 +139,16 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     return AllanDeviation(kind, float(fs), np.asarray(ms) / fs, np.asarray(ms), var,
                           np.sqrt(var), count, excluded, alpha, edf, np.sqrt(lo), np.sqrt(hi),
                           float(ci), int(n), n_missing, note)
+
+
+def _on_cpu() -> bool:
+    """True unless JAX is in use with an accelerator: a caller that never imported JAX gets
+    the CPU path without starting JAX (0.7 s of a CLI call)."""
+    if "jax" not in sys.modules:
+        return True
+    import jax
+
+    return jax.default_backend() == "cpu"
 
 
 def _grid(n, taus, kind, per_decade, m_max) -> tuple[int, ...]:
@@ -136,12 +162,19 @@ def _grid(n, taus, kind, per_decade, m_max) -> tuple[int, ...]:
     return tuple(int(m) for m in ms)
 
 
-def _edf(y, ms, count, kind):
-    """Noise ID and EDF per tau (per sensor for a batch)."""
+class _Done(NamedTuple):
+    value: np.ndarray
+
+    def result(self) -> np.ndarray:
+        return self.value
+
+
+def _edf(y, ms, count, kind, alphas=None):
+    """Noise ID (unless given) and EDF per tau (per sensor for a batch)."""
     if y.ndim == 2:
         parts = [_edf(row, ms, c, kind) for row, c in zip(y, count)]
         return np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
-    alpha = identify_alphas(y, ms, kind=kind)
+    alpha = identify_alphas(y, ms, kind=kind) if alphas is None else np.asarray(alphas)
     # with gaps, the EDF of a contiguous record that would give the kept number of terms
     edf = np.array([edf_for_kind([a], [m], int(round(_n_for_count(c, m, kind))), kind)[0]
                     for a, m, c in zip(alpha, ms, count)])

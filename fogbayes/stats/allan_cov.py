@@ -37,8 +37,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
+
+from .._xp import namespace
 
 NOISE_TYPES = ("quantization", "white", "flicker", "rrw")
 _C = np.array([1.0, -2.0, 1.0])
@@ -151,15 +152,16 @@ def mixture_moments(tensors: CovTensors, scales, ramp=0.0):
 
     Works on NumPy or JAX arrays (differentiable in ``scales`` and ``ramp``).
     """
-    s = jnp.asarray(scales)
-    ms = jnp.asarray(tensors.ms, dtype=float)
-    mean = s @ jnp.asarray(tensors.expect) + ramp**2 * ms**2 / 2.0
-    cov = jnp.einsum("jkpq,p,q->jk", jnp.asarray(tensors.T), s, s)
-    cov = cov + ramp**2 * jnp.einsum("jkp,p->jk", jnp.asarray(tensors.U), s)
+    xp = namespace(scales, ramp)
+    s = xp.asarray(scales, dtype=float)
+    ms = xp.asarray(tensors.ms, dtype=float)
+    mean = s @ xp.asarray(tensors.expect) + ramp**2 * ms**2 / 2.0
+    cov = xp.einsum("jkpq,p,q->jk", xp.asarray(tensors.T), s, s)
+    cov = cov + ramp**2 * xp.einsum("jkp,p->jk", xp.asarray(tensors.U), s)
     return mean, cov
 
 
 def mixture_edf(tensors: CovTensors, scales) -> np.ndarray:
     """EDF per tau implied by the mixture: ``2 mean^2 / var``."""
     mean, cov = mixture_moments(tensors, scales)
-    return np.asarray(2 * mean ** 2 / jnp.diag(cov))
+    return np.asarray(2 * mean ** 2 / namespace(cov).diag(cov))

@@ -43,14 +43,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-#: kind -> (number of block sums per term K, normalisation, overlapping)
-STENCILS = {
-    "oadev": (2, 2.0, True),
-    "adev": (2, 2.0, False),
-    "ohdev": (3, 6.0, True),
-    "hdev": (3, 6.0, False),
-}
-KINDS = (*STENCILS, "mdev")
+from .allan_stencils import KINDS, STENCILS, static_counts  # noqa: F401 -- re-exported
+
 _CACHE_WORDS = 1 << 20  # float64 words read per chunk iteration (8 MB: about L2 + L3 share)
 _MAX_UNROLLED = 256  # more taus than this: lax.map instead of one unrolled expression
 
@@ -72,15 +66,6 @@ def _term(parts: list[jax.Array]) -> jax.Array:
     while len(parts) > 1:
         parts = [b - a for a, b in zip(parts[:-1], parts[1:])]
     return parts[0]
-
-
-def static_counts(n: int, ms: tuple[int, ...], kind: str) -> np.ndarray:
-    """Number of terms per m without gaps (for the EDF and the normalisation)."""
-    if kind == "mdev":
-        return np.array([n + 2 - 3 * m for m in ms], dtype=float)
-    k, _, overlap = STENCILS[kind]
-    length = np.array([n + 1 - k * m for m in ms])
-    return (length if overlap else (length - 1) // np.array(ms) + 1).astype(float)
 
 
 # -- the three code paths for the stencil estimators -----------------------------------
