@@ -17,15 +17,18 @@ noise. The composite (paper 000) compensator lives in :mod:`fogbayes.compensate_
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from functools import lru_cache
 from typing import NamedTuple
 
-import jax
 import numpy as np
 
+from ._lazy import lazy_module
 from .compensate_loops import compensate_into
 from .models.polynomial import PolyBasis
+
+jax = lazy_module("jax")  # the jitted compensator only: one-off calls take the NumPy path
 
 
 class Compensator(NamedTuple):
@@ -59,12 +62,29 @@ def bias_compensator(basis: PolyBasis) -> Compensator:
             acc = term if acc is None else acc + term
         return y - acc
 
-    single = jax.jit(one)
-    if jax.default_backend() == "cpu":  # one pass at memory speed, no intermediate array
+    if _on_cpu():  # one pass at memory speed, no intermediate array, no compilation
         def single(coef, z, y, out=None, method="auto"):
             return compensate_into(basis, np.asarray(coef), np.asarray(z), np.asarray(y), out,
                                    method=method)
-    return Compensator(single, jax.jit(jax.vmap(one)))
+    else:
+        single = jax.jit(one)
+    compiled = []
+
+    def batch(coef, z, y):  # jit(vmap) built on the first batch call, then reused
+        if not compiled:
+            compiled.append(jax.jit(jax.vmap(one)))
+        return compiled[0](coef, z, y)
+
+    batch._cache_size = lambda: compiled[0]._cache_size() if compiled else 0  # programs built
+    return Compensator(single, batch)
+
+
+def _on_cpu() -> bool:
+    """True unless JAX is in use with an accelerator (a caller that never imported JAX is
+    on the CPU path and does not start JAX)."""
+    if "jax" not in sys.modules:
+        return True
+    return jax.default_backend() == "cpu"
 
 
 def compensate_bias(coef, z, y, basis: PolyBasis, *, dtype=np.float64) -> np.ndarray:

@@ -25,14 +25,28 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
-import optax
-from jax.flatten_util import ravel_pytree
-from jax.scipy.linalg import solve_triangular
 
-Array = jax.Array
+from .._lazy import lazy_module
+
+# JAX and optax load on first use: the NumPy path of a one-off fit (``fogbayes fit``) never
+# needs them (0.4 s of a CLI call).
+jax = lazy_module("jax")
+jnp = lazy_module("jax.numpy")
+optax = lazy_module("optax")
+Array = Any
+
+
+def ravel_pytree(tree):
+    from jax.flatten_util import ravel_pytree as ravel
+
+    return ravel(tree)
+
+
+def solve_triangular(a, b, **kw):
+    from jax.scipy.linalg import solve_triangular as solve
+
+    return solve(a, b, **kw)
 
 
 class FitResult(NamedTuple):

@@ -18,6 +18,8 @@ which is what makes the raw form a polynomial in the same terms.
 
 Example:
     >>> import numpy as np
+
+from .._xp import namespace
     >>> b = make_basis(("T",), ((0,), (1,), (2,)), np.array([[-40.0], [60.0]]))
     >>> b.centre, b.scale
     ((10.0,), (50.0,))
@@ -34,7 +36,6 @@ from functools import lru_cache
 from math import comb
 from typing import NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ShapeError
@@ -122,8 +123,8 @@ def design(z, basis: PolyBasis):
     Works in the dtype of ``z`` (float32 stays float32): the centring happens before any
     power is taken, which is what keeps single precision usable.
     """
-    # NumPy in, NumPy out (no JAX dispatch for a workflow's concrete arrays); jnp otherwise
-    xp = np if isinstance(z, np.ndarray) else jnp
+    # NumPy in, NumPy out (no JAX dispatch for a workflow's concrete arrays); JAX otherwise
+    xp = np if isinstance(z, np.ndarray) else namespace(z)
     z = xp.atleast_2d(xp.asarray(z).T).T  # (n,) -> (n, 1)
     zs = (z - xp.asarray(basis.centre, z.dtype)) / xp.asarray(basis.scale, z.dtype)
     cols = []

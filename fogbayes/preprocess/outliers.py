@@ -21,7 +21,6 @@ from typing import NamedTuple
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-from scipy.ndimage import median_filter
 
 from ..errors import ArgumentError, TooShortError
 from ._checks import as_1d, check_positive_int, same_length
@@ -109,6 +108,8 @@ def pauta_flags(x, *, n_sigma: float = 3.0, max_iter: int = 100, t=None,
     base = x
     if smooth_window is not None:
         w = _odd_window(smooth_window, x.size, "smooth_window")
+        from scipy.ndimage import median_filter  # (0.2 s to import: only when used)
+
         base = x - median_filter(x, size=w, mode="nearest")
     flagged = np.zeros(x.size, bool) if pre is None else pre.copy()
     threshold, it = np.inf, 0

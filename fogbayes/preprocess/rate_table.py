@@ -23,7 +23,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from ..errors import ArgumentError, ShapeError, TooShortError
 from ._checks import (GAP_FACTOR, as_1d, check_time, check_window, median_step, same_length,
@@ -107,6 +106,8 @@ def segment_rate_table(time, input_rate=None, temperature=None, *, schedule=None
                             column="input_rate", fix="pass input_rate=... or a schedule")
     dt = median_step(t)
     w = 5 if stable_s is None else max(3, int(round(float(stable_s) / dt)) | 1)
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d  # (0.2 s: only when used)
+
     steady = (maximum_filter1d(W, w, mode="nearest") - minimum_filter1d(W, w, mode="nearest")
               <= rate_tolerance)
     if T is not None:

@@ -32,8 +32,6 @@ import os
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
-from scipy.fft import set_workers
-from scipy.signal import fftconvolve, savgol_coeffs, savgol_filter
 
 from ..errors import ArgumentError, NonFiniteError, ShapeError
 from ._checks import (GAP_FACTOR, as_1d, check_positive_int, check_time, check_window, same_length,
@@ -169,31 +167,51 @@ def _savgol(t, T, window_s, p, gap_factor):
     return out
 
 
+def savgol_slope_kernel(w: int, p: int, delta: float) -> np.ndarray:
+    """Convolution kernel of the Savitzky-Golay first derivative at a window's centre
+    (``scipy.signal.savgol_coeffs(w, p, deriv=1, delta=delta, use="conv")``): row 1 of the
+    least-squares inverse of the window's Vandermonde matrix, reversed for convolution."""
+    h = w // 2
+    x = np.arange(-h, h + 1, dtype=float) / h  # scaled: well conditioned for any w
+    A = np.vander(x, p + 1, increasing=True)
+    return (np.linalg.pinv(A)[1] / (h * delta))[::-1]
+
+
+def _fft_valid(y: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """``fftconvolve(y, kernel, mode="valid")`` along the last axis with NumPy's FFT."""
+    n, w = y.shape[-1], kernel.size
+    size = 1 << int(np.ceil(np.log2(n + w - 1)))
+    full = np.fft.irfft(np.fft.rfft(y, size, axis=-1) * np.fft.rfft(kernel, size), size,
+                        axis=-1)
+    return full[..., w - 1:n]
+
+
 def savgol_slope_grid(y: np.ndarray, w: int, p: int, delta: float,
                       direct_max: int = 501) -> np.ndarray:
-    """Savitzky-Golay derivative on an exact grid, as ``savgol_filter(mode="interp")``.
+    """Savitzky-Golay derivative on an exact grid, as ``scipy.signal.savgol_filter(y, w, p,
+    deriv=1, delta=delta, mode="interp")`` (same numbers to ~1e-12 of the variation).
 
-    ``y``: (n,) or (rows, n), filtered along its last axis.
-
-    A single row with a window up to ``direct_max`` samples uses scipy's filter itself
-    (O(n w)); rows and longer windows (a 60 s window at 200 Hz is 12 001 samples) convolve
-    with the same coefficients by FFT (O(n log n)) and fit the edge polynomials as scipy
-    does (same numbers to ~1e-12 of the variation). The mean is removed
-    first: it does not change a derivative and keeps FFT rounding relative to the
-    variation of ``y``, not to its level.
+    ``y``: (n,) or (rows, n), filtered along its last axis. The interior is a convolution
+    with the centre kernel (direct for one row and windows up to ``direct_max`` samples,
+    else by FFT, O(n log n): a 60 s window at 200 Hz is 12 001 samples); each edge half
+    window takes the derivative of the order-p polynomial fitted to the first/last ``w``
+    samples, as scipy's ``mode="interp"``. On the FFT path the mean is removed first: it does
+    not change a derivative and keeps rounding relative to the variation of ``y``, not to its
+    level; the direct path uses the samples as they are, so each value is independent of the
+    rest of the array (bit-identical in the streaming path's chunks).
+    NumPy only: ``scipy.signal`` costs ~0.9 s to import, most of a ``fogbayes fit`` call.
     """
-    if w <= direct_max and y.ndim == 1:
-        return savgol_filter(y, w, p, deriv=1, delta=delta, mode="interp")
-    # rows, or a long window: convolve with the same coefficients and fit the edge
-    # polynomials here (scipy's edge fit solves each row's least squares: 12 ms per call
-    # for 200 rows, where one polyfit with 200 right-hand sides takes 0.1 ms)
-    y0 = y - y.mean(axis=-1, keepdims=True)
     n, h = y.shape[-1], w // 2
     out = np.empty(y.shape)
-    kernel = savgol_coeffs(w, p, deriv=1, delta=delta, use="conv")
-    with set_workers(os.cpu_count() or 1):  # rows are independent transforms: all cores
-        out[..., h:n - h] = fftconvolve(y0, kernel.reshape((1,) * (y.ndim - 1) + (w,)),
-                                        mode="valid", axes=-1)
+    kernel = savgol_slope_kernel(w, p, delta)
+    if w <= direct_max and y.ndim == 1:
+        # direct sums of the samples themselves: a sample's value does not depend on the
+        # rest of the array (the streaming path's chunks give the same bits)
+        y0 = y
+        out[h:n - h] = np.convolve(y0, kernel, mode="valid")
+    else:
+        y0 = y - y.mean(axis=-1, keepdims=True)
+        out[..., h:n - h] = _fft_valid(y0, kernel)
     u = (np.arange(w) - h) / h  # scaled positions in an edge window
     poly = np.polynomial.polynomial
     for win, pos in ((slice(0, w), slice(0, h)), (slice(n - w, n), slice(n - h, n))):

@@ -10,7 +10,7 @@ halo of ``H`` rows on each side, with the record-wide facts taken from a
 statistics), and only the chunk's own rows are kept:
 
 * ``savgol``: ``H = w`` samples (window plus edge fit). Rows of the chunk then see the same
-  samples as in memory. Windows up to 501 samples use scipy's filter (identical numbers);
+  samples as in memory. Windows up to 501 samples use a direct convolution (identical numbers);
   longer ones go through an FFT whose rounding depends on the array it is given, and each
   run's mean is removed first, so values agree to rounding of the temperature's variation
   (~1e-15 relative), not bit for bit. A run whose steps vary by <= 1e-9 is an exact grid

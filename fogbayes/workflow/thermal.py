@@ -30,7 +30,6 @@ import re
 
 import numpy as np
 
-from ..compensate import compensate_bias
 from ..data.documents import FIT_SCHEMA, validate_in_memory
 from ..errors import FogbayesError, NonFiniteError, TooShortError
 from ..export import basis_from_dict, coefficient_document
@@ -42,7 +41,6 @@ from ..models.thermal import OrderError, ThermalSpec, check_spec, thermal_basis
 from ..preprocess import pauta_flags, segment_thermal
 from ..preprocess.outliers import gross_error_flags
 from ..units import convert_rate
-from ._thermal_bayes import posterior_document
 from ._thermal_data import Processing, fit_blocks, make_processing, sample_covariates
 
 MODELS = ("bias-t", "thermal")
@@ -141,6 +139,8 @@ def _choose_order(specs, blocks, proc, criterion: str, seed: int, bayes_opts: di
     else:
         scores = []
         for spec in specs:
+            from ._thermal_bayes import posterior_document  # NumPyro: only when asked
+
             post = posterior_document(blocks, thermal_basis(spec, blocks.z), proc, seed=seed,
                                       **bayes_opts)
             scores.append(post[criterion].get("elpd", float("-inf")))
@@ -220,6 +220,8 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
                              fix="check the recording for absurd values and the model order")
     lo, hi = blocks.z.min(axis=0), blocks.z.max(axis=0)
     valid = {name: (float(a), float(b)) for name, a, b in zip(basis.names, lo, hi)}
+    from ..compensate import compensate_bias  # (imports JAX; NumPy below 5e6 samples)
+
     after = compensate_bias(coef, clamp_covariates(z, basis, valid), rate, basis)  # as compensation does
     units = {"output": "deg/h", "T": "degC", "dT/dt": "degC/min"}
     warnings = []
@@ -256,6 +258,8 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
     if selection:
         doc["order_selection"] = selection
     if bayes:
+        from ._thermal_bayes import posterior_document  # NumPyro: only when asked
+
         post = posterior_document(blocks, basis, proc, seed=seed, **bayes_opts)
         doc["bayes"] = post
         doc["converged"] = doc["converged"] and post["convergence"]["converged"]
@@ -283,6 +287,8 @@ def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
     if "valid_range" in p:
         z = clamp_covariates(z, basis, p["valid_range"])
     rate = rec.rate("deg/h")
+    from ..compensate import compensate_bias
+
     comp = compensate_bias(np.asarray(p["coef"], dtype=float), z, rate, basis)
     gross = gross_error_flags(comp, limit=RATE_LIMIT_DEG_H)  # e.g. a 1e308 cell
     flags = pauta_flags(comp, n_sigma=float(proc.n_sigma), mask=gross.mask if gross.count else None)
