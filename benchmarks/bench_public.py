@@ -8,7 +8,7 @@ run; absolute times are printed too. Rows:
   2^20. In one process, warm (compilation paid once before), best of ``--repeat``;
 * ``fogbayes allan FILE.npz --json`` on 1e6 samples in a fresh process vs a fresh-process
   script that loads the same file and runs allantools ``oadev`` (wall time: import, read,
-  compilation, fit);
+  compilation, fit), with the compilation cache warm and empty;
 * ``fogbayes fit REC -m thermal --json`` on the 6.3 h, 10 Hz chamber test (fresh process);
 * ``fogbayes --help`` (fresh process; no JAX import).
 
@@ -29,10 +29,21 @@ import numpy as np
 from _timing import best_of
 
 
-def _wall(cmd: list[str], repeat: int) -> float:
+def _wall(cmd: list[str], repeat: int, env: dict | None = None) -> float:
     def run():
-        subprocess.run(cmd, check=True, capture_output=True)
+        subprocess.run(cmd, check=True, capture_output=True, env=env)
     return best_of(run, repeat)
+
+
+def _cold(cmd: list[str]) -> float:
+    """Wall time with an empty compilation cache (Numba compiles every loop it runs)."""
+    import os
+
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "FOGBAYES_CACHE_DIR": cache}
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True, env=env)
+        return time.perf_counter() - t0
 
 
 def bench_functions(repeat: int, sizes) -> None:
@@ -68,13 +79,16 @@ def bench_cli(repeat: int, quick: bool) -> None:
                           f"z = np.load('{tmp / 'static.npz'}')\n"
                           "allantools.oadev(z['output'], rate=10.0, data_type='freq', "
                           "taus='octave')\n")
-        cli = _wall(exe + ["allan", str(tmp / "static.npz"), "--json", str(tmp / "a.json")],
-                    repeat)
+        allan_cmd = exe + ["allan", str(tmp / "static.npz"), "--json", str(tmp / "a.json")]
+        cold = _cold(allan_cmd)
+        cli = _wall(allan_cmd, repeat)
         ref = _wall([sys.executable, str(script)], repeat)
         print("| command (fresh process) | fogbayes (s) | reference (s) | fogbayes / reference |")
         print("| --- | --- | --- | --- |")
         print(f"| fogbayes allan, {n} samples NPZ | {cli:.2f} | {ref:.2f} (load + allantools "
               f"oadev script) | {cli / ref:.2f} |")
+        print(f"| fogbayes allan, {n} samples NPZ, empty compilation cache | {cold:.2f} | "
+              f"{ref:.2f} | {cold / ref:.2f} |")
         dur, fs = (3600.0, 1.0) if quick else (None, None)
         chamber = simulate("thermal", seed=0, duration=dur, fs=fs).recording
         fogbayes.save(chamber, tmp / "chamber.csv")
