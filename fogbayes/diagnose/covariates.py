@@ -12,7 +12,8 @@ Block means of a design column are exact for linear models: the block-mean model
 y = X beta + noise is ybar = Xbar beta + noise-bar.
 
 Temperature rate dT/dt (deg C/min, first channel): Savitzky-Golay (order 2) derivative of
-the block-mean temperature over ``rate_window_s`` (60 s by default: long enough that
+the block-mean temperature (the filter of ``fogbayes fit``,
+:func:`fogbayes.preprocess.temperature_rate.savgol_slope_grid`) over ``rate_window_s`` (60 s by default: long enough that
 sensor noise and 0.01 deg C quantization stay below ~0.005 deg C/min, short against the
 ~300 s sensor lags of chamber tests), interpolated back to every sample by a cubic spline;
 near a corner of the chamber programme (a jump of d2T/dt2, found by a scan at family-wise
@@ -27,9 +28,9 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.signal import savgol_filter
 
 from ..errors import TooShortError
+from ..preprocess.temperature_rate import savgol_slope_grid
 from .corners import keep_corners
 
 
@@ -146,11 +147,11 @@ def block_temperature(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
     Tb = _fill(grid.mean(T0), grid.mask, grid.t)
     if wl < 5:
         return Tb, np.gradient(Tb, grid.dt)
-    slope = savgol_filter(Tb, wl, 2, deriv=1, delta=grid.dt, mode="interp")
+    slope = savgol_slope_grid(Tb, wl, 2, grid.dt)
     shift = _fill(grid.mean(t_rel), grid.mask, grid.t) - grid.t
     if np.any(np.abs(shift) > 1e-9 * grid.dt):
         Tb = Tb - slope * shift
-        slope = savgol_filter(Tb, wl, 2, deriv=1, delta=grid.dt, mode="interp")
+        slope = savgol_slope_grid(Tb, wl, 2, grid.dt)
     return Tb, slope
 
 
