@@ -115,9 +115,15 @@ def test_newer_or_broken_loop_documents_are_one_line_exit_2(runs, capsys):
     capsys.readouterr()
     assert _comp(d, str(d / "loop.json"), "--stream") == 2
     assert "--stream" in capsys.readouterr().err
+
+
+def test_report_applies_the_loop_calibration_to_the_next_run(runs):
+    d, _, _ = runs
     assert cli.main(["-q", "report", str(d / "b.csv"), "--fit", str(d / "loop.json"),
-                     "--out", str(d / "r.html")]) == 2
-    assert "compensate --params" in capsys.readouterr().err
+                     "--out", str(d / "r.html")]) == 0
+    page = (d / "r.html").read_text()
+    assert "Calibration applied (from the closed loop)" in page
+    assert "temperature_rate" in page and "raw → calibrated" in page
 
 
 def test_run_events_are_left_out_unless_asked(runs, tmp_path):

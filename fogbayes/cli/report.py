@@ -30,7 +30,9 @@ def report(
     model: str = typer.Option(None, "--model", "-m",
                               help="Fit this model first: bias-t, thermal, composite, allan."),
     fit: Path = typer.Option(None, "--fit", "--params", "-p",
-                             help="Use this fit document (from 'fogbayes fit --json')."),
+                             help="Use this fit document (from 'fogbayes fit --json'), or "
+                                  "apply a loop document's calibration (from 'fogbayes loop "
+                                  "--json') to this recording."),
     loop_json: Path = typer.Option(None, "--loop", help="Re-run and tell the closed loop "
                                    "recorded in this JSON (from 'fogbayes loop --json')."),
     bayes: bool = typer.Option(False, help="Posterior intervals (NumPyro) with --model."),
@@ -61,9 +63,9 @@ def report(
 
     refuse_overwrite({"the recording": rec_path, "the --fit document": fit,
                       "the --loop document": loop_json}, {"--out": out, "--pdf": pdf})
-    from ..data.documents import agreed_unit, read_fit_document
+    from ..data.documents import agreed_unit, read_calibration
 
-    fit_doc = read_fit_document(fit) if fit else None  # validated; its unit must agree
+    fit_doc = read_calibration(fit) if fit else None  # fit or loop document, validated
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=agreed_unit(fit_doc, str(fit), rec_path, output_unit)
                          if fit_doc else output_unit, scale_factor=scale_factor,

@@ -13,12 +13,13 @@ y = X beta + noise is ybar = Xbar beta + noise-bar.
 
 Temperature rate dT/dt (deg C/min, first channel): Savitzky-Golay (order 2) derivative of
 the block-mean temperature (the filter of ``fogbayes fit``,
-:func:`fogbayes.preprocess.temperature_rate.savgol_slope_grid`) over ``rate_window_s`` (60 s by default: long enough that
-sensor noise and 0.01 deg C quantization stay below ~0.005 deg C/min, short against the
-~300 s sensor lags of chamber tests), interpolated back to every sample by a cubic spline;
-near a corner of the chamber programme (a jump of d2T/dt2, found by a scan at family-wise
-alpha 0.01, :mod:`fogbayes.diagnose.corners`) the slope of a fit whose curvature jumps
-there replaces it, so the kink of dT/dt is kept instead of rounded over the window.
+:func:`fogbayes.preprocess.temperature_rate.savgol_slope_grid`) over ``rate_window_s``
+(60 s by default: long enough that sensor noise and 0.01 deg C quantization stay below
+~0.005 deg C/min, short against the ~300 s sensor lags of chamber tests), interpolated
+back to every sample by a cubic spline; near a corner of the chamber programme (a jump of
+d2T/dt2, found by a scan at family-wise alpha 0.01, :mod:`fogbayes.diagnose.corners`) the
+slope of a fit whose curvature jumps there replaces it, so the kink of dT/dt is kept
+instead of rounded over the window.
 """
 
 from __future__ import annotations

@@ -18,8 +18,6 @@ which is what makes the raw form a polynomial in the same terms.
 
 Example:
     >>> import numpy as np
-
-from .._xp import namespace
     >>> b = make_basis(("T",), ((0,), (1,), (2,)), np.array([[-40.0], [60.0]]))
     >>> b.centre, b.scale
     ((10.0,), (50.0,))
@@ -37,6 +35,8 @@ from math import comb
 from typing import NamedTuple
 
 import numpy as np
+
+from .._xp import namespace
 
 from ..errors import ShapeError
 

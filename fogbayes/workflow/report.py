@@ -52,6 +52,10 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
     from ..report import sections as S
     from ..report.html import write
 
+    from ..data.doc_rules import is_loop_document
+
+    if fit is not None and is_loop_document(fit):
+        return _loop_calibration_report(rec, out, fit, seed=seed, title=title, allan=allan)
     if fit is None and model is not None:
         fit = workflow_for(model).fit_recording(rec, model=model, bayes=bayes, seed=seed)
     parts, outliers, gross, residual_rec = [], None, None, rec
@@ -123,6 +127,34 @@ def gross_errors(residual: np.ndarray, flagged: np.ndarray, k: float = GROSS_SIG
     sigma = 1.4826 * np.median(np.abs(r[ok] - med))
     far = ~ok | (np.abs(r - med) > k * sigma) if sigma > 0 else ~ok
     return np.asarray(flagged, bool) & far
+
+
+def _loop_calibration_report(rec, out, doc, *, seed, title, allan) -> Path:
+    """A loop document's calibration applied to ``rec``: headline, what was applied,
+    recording, residual, noise of the calibrated output."""
+    from ..report import calibration as C
+    from ..report import sections as S
+    from ..report.html import write
+
+    applied, residual = C.apply_loop_document(rec, doc)
+    outliers = np.asarray(applied.columns["outlier"], bool)
+    parts = [C.calibration_headline(rec, doc, residual, seed),
+             C.calibration_section(doc, applied),
+             S.recording_section(rec, outliers=outliers)]
+    residual_rec = rec
+    if residual is not None:
+        residual_rec = rec.replace(output=residual, unit="deg/h", scale_factor=None)
+        parts.append(S.residual_section(rec, residual, covariates(rec), model=doc["model"]))
+    if allan:
+        try:
+            parts.append(S.noise_section(workflow_for("allan").fit_recording(
+                residual_rec, model="allan", seed=seed)))
+        except FogbayesError as exc:
+            parts.append(S.Section("Noise: Allan deviation").note(
+                f"No Allan analysis for this record: {exc}", ok=False))
+    return write(out, title or f"Calibration report: {rec.meta.sensor_id}", parts,
+                 subtitle=f"source: {rec.meta.source or 'in memory'}; calibration: the loop "
+                          f"document of {doc['input'].get('file') or 'another run'}")
 
 
 def _intervals(rec, residual, det) -> dict:
