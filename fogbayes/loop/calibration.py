@@ -186,6 +186,6 @@ def apply_calibration(doc: dict, rec, *, run_events: bool = False) -> Applied:
         bias = design(terms, cov) @ beta if terms else np.zeros(rec.n)
         cols["output"] = convert_rate(rate - bias, "deg/h", rec.unit,
                                       scale_factor=rec.scale_factor)
-    cols["outlier"] = outlier
+    cols["outlier"] = outlier | ~np.isfinite(cols["rate"]) if "rate" in cols else outlier
     return Applied(cols, bias, skipped, _outside(cal.get("valid") or {}, cov,
                                                  list(cov.names)))
