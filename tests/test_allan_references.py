@@ -56,7 +56,7 @@ def _within_print_rounding(ours, printed):
     return np.abs(ours - printed) <= half_unit + 1e-6 * np.abs(printed)
 
 
-@pytest.mark.parametrize("kind", ["oadev", "adev", "mdev", "ohdev", "hdev"])
+@pytest.mark.parametrize("kind", ["oadev", "adev", "mdev", "ohdev", "hdev", "tdev"])
 def test_reproduces_stable32_alltau(measured, kind):
     y = _ocxo(measured)
     table = np.loadtxt(measured(OCXO, f"stable32_{kind}_alltau.txt"), comments="#")
@@ -65,17 +65,19 @@ def test_reproduces_stable32_alltau(measured, kind):
     np.testing.assert_array_equal(res.n_terms, table[:, 2])  # the "#" column
     assert np.all(_within_print_rounding(res.dev, table[:, 5]))
     exact = np.mean([f"{v:.4e}" == f"{p:.4e}" for v, p in zip(res.dev, table[:, 5])])
-    # measured: oadev/mdev 272 of 273 identical strings, adev/hdev/ohdev 258-270 of 261-273
+    # measured: oadev/mdev/tdev 272 of 273 identical strings, adev/hdev/ohdev 258-270 of
+    # 261-273
     assert exact > 0.98
 
 
-@pytest.mark.parametrize("kind", ["oadev", "adev", "mdev", "ohdev", "hdev"])
+@pytest.mark.parametrize("kind", ["oadev", "adev", "mdev", "ohdev", "hdev", "tdev"])
 def test_confidence_intervals_match_stable32_octave(measured, kind):
     y = _ocxo(measured)
     table = np.loadtxt(measured(OCXO, f"{kind}_octave.txt"), comments="#")
     ms, alpha, lo, sigma, hi = (table[:, 0].astype(int), table[:, 3].astype(int), table[:, 4],
                                 table[:, 5], table[:, 6])
-    edf = edf_for_kind(alpha, ms, y.size, kind)  # Stable32's own noise type per tau
+    base = "mdev" if kind == "tdev" else kind  # TDEV = tau MDEV / sqrt 3: the same EDF
+    edf = edf_for_kind(alpha, ms, y.size, base)  # Stable32's own noise type per tau
     vlo, vhi = chi2_interval(sigma**2, edf, ci=0.683)
     # Stable32 prints 5 digits and uses Greenhall's tables where we sum exactly (~4e-4 apart)
     np.testing.assert_allclose(np.sqrt(vlo), lo, rtol=1e-3)
@@ -119,3 +121,16 @@ def test_published_maximal_overlap_avar_of_adis_run1(measured):
         # match to 4e-11) by up to 6e-6 relative (SOURCE.md measured <= 6e-6): its own
         # rounding, not ours.
         np.testing.assert_allclose(res.var, rows["mo_avar"].to_numpy(), rtol=1e-5, err_msg=ch)
+
+
+def test_tdev_equals_allantools_and_scales_mdev(measured):
+    y = _ocxo(measured)
+    ref = allantools.tdev(y, rate=1.0, data_type="freq", taus="octave")
+    ms = tuple(int(round(t)) for t in ref[0])
+    res = allan_deviation(y, 1.0, taus=ms, kind="tdev")
+    np.testing.assert_allclose(res.dev, ref[1], rtol=1e-9)  # measured 3e-14
+    mod = allan_deviation(y, 1.0, taus=ms, kind="mdev")
+    f = res.tau / np.sqrt(3.0)  # NIST SP 1065 eq. 17, intervals included
+    np.testing.assert_allclose(res.dev_low, mod.dev_low * f, rtol=1e-12)
+    np.testing.assert_allclose(res.dev_high, mod.dev_high * f, rtol=1e-12)
+    assert res.kind == "tdev" and np.array_equal(res.alpha, mod.alpha)

@@ -25,6 +25,7 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
+import math
 import sys
 
 import numpy as np
@@ -46,7 +47,7 @@ _NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-noise-id")
 class AllanDeviation(NamedTuple):
     """Deviations at each tau (arrays of length ``len(tau)``, or (batch, len(tau)))."""
 
-    kind: str            # oadev, adev, mdev, ohdev, hdev
+    kind: str            # oadev, adev, mdev, ohdev, hdev, tdev
     fs: float            # Hz
     tau: np.ndarray      # s
     m: np.ndarray        # cluster sizes (samples)
@@ -73,7 +74,10 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
         y: rate samples in any unit (the deviation has the same unit); NaN = missing.
         fs: sample rate in Hz (tau = m / fs).
         taus: grid name (``octave``, ``decade``, ``dense``, ``all``) or explicit cluster sizes.
-        kind: ``oadev`` (overlapping Allan, default), ``adev``, ``mdev``, ``ohdev``, ``hdev``.
+        kind: ``oadev`` (overlapping Allan, default), ``adev``, ``mdev``, ``ohdev``, ``hdev``,
+            ``tdev`` (time deviation tau MDEV / sqrt(3), NIST SP 1065 eq. 17: in the unit
+            of ``y`` times seconds -- seconds for fractional frequency, deg/h * s = 1/3600
+            deg for a gyro in deg/h; its intervals and noise types are the MDEV ones).
         per_decade: points per decade of the ``dense`` grid.
         m_max: largest cluster size (default: Stable32's stop ratio, see ``taus``).
         ci: two-sided confidence of ``dev_low``/``dev_high`` (0.683 for Stable32's 1 sigma).
@@ -84,12 +88,19 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             :func:`~fogbayes.stats.allan_kernels.allan_sums` (``direct``, ``chunked``,
             ``mapped``).
     """
+    if kind == "tdev":  # TDEV^2 = tau^2 Mod AVAR / 3: the modified variance, rescaled
+        r = allan_deviation(y, fs, taus=taus, kind="mdev", per_decade=per_decade, m_max=m_max,
+                            ci=ci, method=method)
+        f = r.tau / math.sqrt(3.0)
+        return r._replace(kind="tdev", var=r.var * f ** 2, dev=r.dev * f,
+                          dev_low=r.dev_low * f, dev_high=r.dev_high * f)
     y = np.asarray(y, dtype=float)
     if y.ndim not in (1, 2):
         raise FogbayesError(f"rate data must be 1-D (or 2-D for a batch), got shape {y.shape}",
                             fix="pass one sensor as (n,) or a batch as (sensors, n)")
     if kind not in KINDS:
-        raise FogbayesError(f"unknown deviation '{kind}'", fix=f"use one of {', '.join(KINDS)}")
+        raise FogbayesError(f"unknown deviation '{kind}'",
+                            fix=f"use one of {', '.join(KINDS)}, tdev")
     if not (np.isfinite(fs) and fs > 0):
         raise FogbayesError(f"sample rate must be positive and finite, got {fs}",
                             fix="pass fs in Hz")
