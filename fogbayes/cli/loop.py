@@ -114,6 +114,8 @@ def loop(
         reason = "no further" + reason[len("no"):]
     say(f"{model}: added {added}; 10 s RMS {res.initial.rms:.4g} -> {res.final.rms:.4g} deg/h; "
         f"stopped: {reason}")
+    for w in res.warnings:
+        say(f"warning: {w}")
     if res.unexplained:  # structure no candidate names: say so where the user looks first
         kinds = sorted({u["kind"] for u in res.unexplained})
         say(f"unexplained: {', '.join(kinds)} (see 'unexplained' in the JSON)")

@@ -39,6 +39,7 @@ from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, base_terms
 from .calibration import calibration_json, input_json
+from .identifiable import collinearity_warnings
 from .compensate import compensate
 from .describe import describe
 from .metrics import Metrics, block_rms, stability
@@ -298,7 +299,8 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         unexplained += _allan_story(rec, ctx, steps)
     comp = compensate(rec, ctx, fit, model)
     return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE,
-                      noise_prior, input_json(rec), calibration_json(fit, ctx, model))
+                      noise_prior, input_json(rec), calibration_json(fit, ctx, model),
+                      tuple(collinearity_warnings(ctx)))
 
 
 def _allan_story(rec, ctx: Context, steps: list[Step]) -> list[dict]:

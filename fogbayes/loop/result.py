@@ -65,6 +65,7 @@ class LoopResult(NamedTuple):
     noise_prior: NoisePrior | None = None
     input: dict | None = None          # unit, scale factor, channels of the recording
     calibration: dict | None = None    # the final model, applicable to new runs
+    warnings: tuple = ()               # drivers the record cannot tell apart (identifiable)
 
     @property
     def effects(self) -> list[str]:
@@ -83,6 +84,8 @@ class LoopResult(NamedTuple):
                "steps": steps, "final": m(self.final), "unexplained": self.unexplained}
         if self.noise_prior is not None:  # an assumption every number above depends on
             doc["noise_prior"] = self.noise_prior.to_json(self.context.grid.dt)
+        if self.warnings:
+            doc["warnings"] = list(self.warnings)
         if self.calibration is not None:
             doc["input"] = self.input
             doc["calibration"] = self.calibration
