@@ -17,14 +17,13 @@ noise. The composite (paper 000) compensator lives in :mod:`fogbayes.compensate_
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable, Iterable, Iterator
 from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
 
-from ._lazy import lazy_module
+from ._lazy import jax_on_cpu, lazy_module
 from .compensate_loops import compensate_into
 from .models.polynomial import PolyBasis
 
@@ -62,7 +61,7 @@ def bias_compensator(basis: PolyBasis) -> Compensator:
             acc = term if acc is None else acc + term
         return y - acc
 
-    if _on_cpu():  # one pass at memory speed, no intermediate array, no compilation
+    if jax_on_cpu():  # one pass at memory speed, no intermediate array, no compilation
         def single(coef, z, y, out=None, method="auto"):
             return compensate_into(basis, np.asarray(coef), np.asarray(z), np.asarray(y), out,
                                    method=method)
@@ -77,14 +76,6 @@ def bias_compensator(basis: PolyBasis) -> Compensator:
 
     batch._cache_size = lambda: compiled[0]._cache_size() if compiled else 0  # programs built
     return Compensator(single, batch)
-
-
-def _on_cpu() -> bool:
-    """True unless JAX is in use with an accelerator (a caller that never imported JAX is
-    on the CPU path and does not start JAX)."""
-    if "jax" not in sys.modules:
-        return True
-    return jax.default_backend() == "cpu"
 
 
 def compensate_bias(coef, z, y, basis: PolyBasis, *, dtype=np.float64) -> np.ndarray:

@@ -26,10 +26,10 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import math
-import sys
 
 import numpy as np
 
+from .._lazy import jax_on_cpu
 from ..errors import FogbayesError, TooShortError
 from .allan_blocked import allan_variance_fast
 from .allan_stencils import KINDS, static_counts
@@ -123,11 +123,11 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     alphas = _NOISE_ID.submit(identify_alphas, y, ms, kind=kind) \
         if y.ndim == 1 and n >= PARALLEL_NOISE_ID else None
     if kind == "oadev" and method in ("auto", "blocked") and (
-            method == "blocked" or _on_cpu()):
+            method == "blocked" or jax_on_cpu()):
         # CPU: the cache-blocked NumPy accumulators (Haar pyramid on octave grids), the
         # same estimator to ~1e-12 and 2-3x faster than the XLA kernels here (allan_blocked)
         var, count = allan_variance_fast(y, ms)
-    elif kind in ("mdev", "ohdev") and method == "auto" and _on_cpu():
+    elif kind in ("mdev", "ohdev") and method == "auto" and jax_on_cpu():
         # CPU: one fused compiled pass per tau from the phase (allan_fused), ~6-8x the
         # XLA kernels here; a batch runs row by row
         from .allan_fused import mod_hadamard_variance
@@ -159,16 +159,6 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     return AllanDeviation(kind, float(fs), np.asarray(ms) / fs, np.asarray(ms), var,
                           np.sqrt(var), count, excluded, alpha, edf, np.sqrt(lo), np.sqrt(hi),
                           float(ci), int(n), n_missing, note)
-
-
-def _on_cpu() -> bool:
-    """True unless JAX is in use with an accelerator: a caller that never imported JAX gets
-    the CPU path without starting JAX (0.7 s of a CLI call)."""
-    if "jax" not in sys.modules:
-        return True
-    import jax
-
-    return jax.default_backend() == "cpu"
 
 
 def _grid(n, taus, kind, per_decade, m_max) -> tuple[int, ...]:
