@@ -57,12 +57,24 @@ def _law(effect: str | None) -> dict:
     return law
 
 
-def run_case(case: dict) -> dict:
-    import numpy as np
-
+def loop_then_apply(a, b, model: str, seed: int):
+    """The loop on run A at the CLI's defaults, its document through JSON (what ``fogbayes
+    loop --json`` writes and ``compensate --params`` reads), applied to run B.
+    Returns (loop result, applied calibration, the loop's wall time on A in s)."""
     from fogbayes.loop import run_loop
     from fogbayes.loop.calibration import apply_calibration
     from fogbayes.loop.calibration_doc import validate_loop_document
+
+    t0 = time.time()
+    res = run_loop(a, model, seed=seed)
+    wall = time.time() - t0
+    doc = validate_loop_document(json.loads(json.dumps(res.to_json())), "loop")
+    return res, apply_calibration(doc, b), wall
+
+
+def run_case(case: dict) -> dict:
+    import numpy as np
+
     from fogbayes.loop.metrics import block_rms
     from fogbayes.simulate.scenarios import simulate
     from fogbayes.workflow import thermal
@@ -73,11 +85,7 @@ def run_case(case: dict) -> dict:
     sim_b = simulate("thermal", seed=s + 1000, fs=1.0, duration=2.5 * 3600.0, effects=law,
                      temperature_noise=0.01, **RUN_B)
     b = sim_b.recording
-    t0 = time.time()
-    res = run_loop(a, "bias-t", seed=s)
-    wall = time.time() - t0
-    doc = validate_loop_document(json.loads(json.dumps(res.to_json())), "loop")
-    applied = apply_calibration(doc, b)
+    res, applied, wall = loop_then_apply(a, b, "bias-t", s)
     flag = applied.columns["outlier"]
     rate = b.rate("deg/h")
     truth = np.sum(list(sim_b.truth.effects.values()), axis=0)
@@ -102,9 +110,6 @@ GRID_B = {"temperatures": (-20.0, -10.0, 0.0, 10.0, 20.0, 40.0),
 def run_composite_case(case: dict) -> dict:
     import numpy as np
 
-    from fogbayes.loop import run_loop
-    from fogbayes.loop.calibration import apply_calibration
-    from fogbayes.loop.calibration_doc import validate_loop_document
     from fogbayes.loop.metrics import block_rms
     from fogbayes.loop.testbed import _scaled
     from fogbayes.simulate.scenarios import simulate
@@ -117,11 +122,7 @@ def run_composite_case(case: dict) -> dict:
     sim_b = simulate("ratetable", seed=s + 1000, fs=1.0, duration=1.5 * 3600.0, effects=law,
                      **GRID_B)
     b = sim_b.recording
-    t0 = time.time()
-    res = run_loop(a, "composite", seed=s)
-    wall = time.time() - t0
-    doc = validate_loop_document(json.loads(json.dumps(res.to_json())), "loop")
-    applied = apply_calibration(doc, b)
+    res, applied, wall = loop_then_apply(a, b, "composite", s)
     flag = applied.columns["outlier"]
     w_true = np.asarray(b.input_rate, float)
     p = sim_b.truth.params["effects"][eff]
