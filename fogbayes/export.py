@@ -15,6 +15,16 @@ so only a cubic in one temperature fits (no dT/dt term: the firmware has no inpu
 and converts them to rad/s; a ``thermal`` model raises an error that says so; a loop
 document's calibration goes through :func:`basis_from_loop` (which names any term PX4
 cannot take).
+
+ArduPilot (``INS_TCAL<i>_*``, AP_InertialSensor_tempcal.cpp): with ``P(d) = (c1 d + c2 d^2 +
+c3 d^3) * 1e-6`` (``c_k`` = parameter ``GYR<k>_<axis>``, rad/s) and ``T``, ``T_cal`` clamped
+to ``[TMIN, TMAX]``, the firmware corrects::
+
+    rate = raw_rate - P(T - 35) + P(T_cal - 35)
+
+where ``T_cal`` is the temperature of the boot-time gyro offset calibration (which removes
+the constant): :func:`ardupilot_gyro_parameters` rebases the cubic about 35 degC and drops
+its constant.
 """
 
 from __future__ import annotations
@@ -91,16 +101,8 @@ def px4_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, gyro_in
     if not 1 <= len(axes) <= 3:
         raise ExportError(f"PX4 takes 1 to 3 gyro axes, got {len(axes)}",
                           fix="pass the x, y, z fits in that order")
-    for a, (basis, _) in enumerate(axes):
-        if basis.names != ("T",) or max(e[0] for e in basis.terms) > 3:
-            raise ExportError(
-                f"axis {a}: PX4 compensates with a cubic in temperature only, the model has "
-                f"terms {basis.labels()}", column="model",
-                fix="fit '--model bias-t --order 3' (or lower) for PX4 export")
-    if t_range is None:
-        lo = min(b.centre[0] - b.scale[0] for b, _ in axes)
-        hi = max(b.centre[0] + b.scale[0] for b, _ in axes)
-        t_range = (lo, hi)
+    _cubic_in_t(axes, "PX4")
+    t_range = _span(axes) if t_range is None else t_range
     t_ref = 0.5 * (t_range[0] + t_range[1]) if t_ref is None else float(t_ref)
     g = f"TC_G{gyro_index}_"
     out: dict = {"TC_G_ENABLE": 1, g + "ID": int(device_id), g + "TREF": t_ref,
@@ -111,6 +113,57 @@ def px4_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, gyro_in
             v = about_ref[basis.terms.index((k,))] if (k,) in basis.terms else 0.0
             out[f"{g}X{k}_{a}"] = float(v * DEG_H_TO_RAD_S)
     return out
+
+
+#: ArduPilot's fixed reference temperature (TEMP_REFERENCE) and parameter scale (SCALE_FACTOR)
+ARDUPILOT_TREF = 35.0
+ARDUPILOT_SCALE = 1.0e6
+
+
+def _cubic_in_t(axes, firmware: str) -> None:
+    for a, (basis, _) in enumerate(axes):
+        if basis.names != ("T",) or max(e[0] for e in basis.terms) > 3:
+            raise ExportError(
+                f"axis {a}: {firmware} compensates with a cubic in temperature only, the model "
+                f"has terms {basis.labels()}", column="model",
+                fix=f"fit '--model bias-t --order 3' (or lower) for {firmware} export")
+
+
+def _span(axes) -> tuple[float, float]:
+    return (min(b.centre[0] - b.scale[0] for b, _ in axes),
+            max(b.centre[0] + b.scale[0] for b, _ in axes))
+
+
+def ardupilot_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, imu_index: int = 1,
+                              t_range: tuple[float, float] | None = None) -> dict:
+    """ArduPilot ``INS_TCAL<i>_*`` gyro parameters from one ``bias-t`` model (deg/h) per axis.
+
+    ``GYR<k>_<X|Y|Z>`` = 1e6 x the degree-k coefficient (rad/s) of the bias about 35 degC;
+    ``TMIN``/``TMAX`` default to the temperature span the fits were made on (outside it the
+    firmware clamps). The accelerometer parameters (``ACC<k>_*``) are not written: loading
+    the file leaves an existing accelerometer calibration as it is.
+    """
+    if not 1 <= len(axes) <= 3:
+        raise ExportError(f"ArduPilot takes 1 to 3 gyro axes, got {len(axes)}",
+                          fix="pass the x, y, z fits in that order")
+    _cubic_in_t(axes, "ArduPilot")
+    lo, hi = _span(axes) if t_range is None else t_range
+    p = f"INS_TCAL{int(imu_index)}_"
+    out: dict = {p + "ENABLE": 1, p + "TMIN": float(lo), p + "TMAX": float(hi)}
+    for a, (basis, coef) in enumerate(axes):
+        about_ref = rebase_matrix(basis, origin=[ARDUPILOT_TREF]) @ np.asarray(coef, dtype=float)
+        for k in (1, 2, 3):
+            v = about_ref[basis.terms.index((k,))] if (k,) in basis.terms else 0.0
+            out[f"{p}GYR{k}_{'XYZ'[a]}"] = float(v * DEG_H_TO_RAD_S * ARDUPILOT_SCALE)
+    return out
+
+
+def ardupilot_param_file(params: dict) -> str:
+    """Mission Planner / MAVProxy ``.param`` text: ``NAME,VALUE`` lines."""
+    lines = ["# ArduPilot gyro temperature calibration written by fogbayes export",
+             "# the accelerometer INS_TCAL*_ACC* parameters are not included"]
+    lines += [f"{k},{v}" if isinstance(v, int) else f"{k},{v:.9g}" for k, v in params.items()]
+    return "\n".join(lines) + "\n"
 
 
 def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis, np.ndarray]:
@@ -142,7 +195,7 @@ def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis,
             powers.extend(p["powers"])
             coef.extend(c)
         else:
-            raise ExportError(f"PX4 compensates with a polynomial in one temperature only; the "
+            raise ExportError(f"PX4 and ArduPilot compensate with a polynomial in one temperature; the "
                               f"calibration has the term {t['effect']!r} ({t['kind']}), which "
                               f"the firmware has no input for", file=source, column="model",
                               fix="export a loop run without that effect, or apply the "

@@ -1,0 +1,136 @@
+r"""Noise coefficients for filters: IEEE 952 terms in SI units, Kalibr/OpenVINS ``imu.yaml``.
+
+An Allan document (``fogbayes allan --json``) holds the five IEEE 952 terms in the gyro
+community's units (:data:`fogbayes.models.allan.UNITS`). Filters want SI, continuous-time
+densities (the table is ``docs/units.md``):
+
+==========  ===================  ==========================  ===============================
+term        document unit        SI, continuous time         factor (document -> SI)
+==========  ===================  ==========================  ===============================
+Q           arcsec               rad                         pi / (180 * 3600)
+N (ARW)     deg/sqrt(h)          rad/s/sqrt(Hz) = rad/sqrt(s)  (pi/180) / 60
+B           deg/h                rad/s                       (pi/180) / 3600
+K (RRW)     deg/h^1.5            rad/s^2/sqrt(Hz)            (pi/180) / 3600 / 60
+R           deg/h^2              rad/s^2                     (pi/180) / 3600^2
+==========  ===================  ==========================  ===============================
+
+``B`` is the coefficient of the flicker term, sigma^2(tau) = (2 ln2 / pi) B^2 on the floor,
+so the ADEV floor ("bias instability" read off a plot) is 0.664 B: both are written.
+Discrete-time values at sample rate fs (what a filter adds per step) are
+``N_d = N sqrt(fs)`` (rad/s per sample) and ``K_d = K / sqrt(fs)`` (rad/s per step).
+
+Kalibr's ``imu.yaml`` takes ``gyroscope_noise_density`` = N and ``gyroscope_random_walk`` = K,
+continuous time, SI (Kalibr wiki "IMU Noise Model"; OpenVINS reads the same keys). One
+number per sensor: with several axes the largest is written (the conservative choice) and
+each axis is listed in a comment. Where the document gives an interval, ``quantile`` picks
+what is written: 0.5 the estimate, ``(1 - ci)/2`` / ``(1 + ci)/2`` the interval's ends
+(the document's ``ci``, 0.9 by default); other quantiles are not in the document and are
+refused rather than guessed.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .errors import FogbayesError
+
+DEG = math.pi / 180.0
+#: document unit -> SI factor per term (see the table above)
+TO_SI = {"Q": (DEG / 3600.0, "rad"), "N": (DEG / 60.0, "rad/s/sqrt(Hz)"),
+         "B": (DEG / 3600.0, "rad/s"), "K": (DEG / 3600.0 / 60.0, "rad/s^2/sqrt(Hz)"),
+         "R": (DEG / 3600.0 ** 2, "rad/s^2")}
+DOC_UNITS = {"Q": "arcsec", "N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h^1.5", "R": "deg/h^2"}
+BI_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)  # ADEV floor = 0.664 B
+
+
+class NoiseExportError(FogbayesError):
+    """The document cannot give the requested noise export."""
+
+
+def _terms(doc: dict, source: str | None) -> dict:
+    if not isinstance(doc, dict) or doc.get("model") != "allan":
+        raise NoiseExportError("not an Allan document (its 'model' is "
+                               f"{doc.get('model') if isinstance(doc, dict) else None!r})",
+                               file=source, column="model",
+                               fix="pass the document of 'fogbayes allan --json'")
+    terms = (doc.get("fit") or {}).get("terms") or {}
+    for t, unit in DOC_UNITS.items():
+        e = terms.get(t)
+        if e is not None and e.get("unit") != unit:
+            raise NoiseExportError(f"term {t} is in {e.get('unit')!r}, expected {unit!r}",
+                                   file=source, column=f"fit.terms.{t}.unit",
+                                   fix="write the document again with this fogbayes")
+    return terms
+
+
+def quantile_key(quantile: float, ci: float, source: str | None = None) -> str:
+    """Which of value/low/high holds ``quantile`` of a document whose intervals are ``ci``."""
+    lo, hi = (1.0 - ci) / 2.0, (1.0 + ci) / 2.0
+    for q, key in ((0.5, "value"), (lo, "low"), (hi, "high")):
+        if abs(quantile - q) < 1e-9:
+            return key
+    raise NoiseExportError(
+        f"quantile {quantile:g} is not in the document (it holds the estimate, 0.5, and the "
+        f"{ci:g} interval's ends {lo:g} and {hi:g})", file=source, column="--quantile",
+        fix=f"use --quantile 0.5, {lo:g} or {hi:g}")
+
+
+def ieee952_document(doc: dict, *, source: str | None = None) -> dict:
+    """The five terms with intervals in the document's units and in SI (continuous and,
+    for N and K, discrete time at the record's rate)."""
+    terms, fs, ci = _terms(doc, source), float(doc["fs"]), float(doc.get("ci", 0.9))
+    out = {}
+    for t, (f, si_unit) in TO_SI.items():
+        e = terms.get(t)
+        if e is None:
+            continue
+        row = {"unit": e["unit"], "value": e["value"], "low": e["low"], "high": e["high"],
+               "present": bool(e.get("present", True)), "si_unit": si_unit,
+               "si": {k: e[k] * f for k in ("value", "low", "high")}}
+        if t == "N":
+            row["discrete"] = {"unit": "rad/s", "at_hz": fs,
+                               **{k: e[k] * f * math.sqrt(fs) for k in ("value", "low", "high")}}
+        if t == "K":
+            row["discrete"] = {"unit": "rad/s", "at_hz": fs,
+                               **{k: e[k] * f / math.sqrt(fs) for k in ("value", "low", "high")}}
+        if t == "B":
+            row["adev_floor"] = {k: e[k] * BI_FACTOR for k in ("value", "low", "high")}
+        out[t] = row
+    return {"schema": "fogbayes.ieee952/1", "sensor_id": doc.get("sensor_id"),
+            "source": doc.get("source"), "fs": fs, "ci": ci,
+            "interval": "value = the fit's estimate; [low, high] its two-sided ci interval",
+            "terms": out}
+
+
+def kalibr_yaml(docs: list[tuple[dict, str | None]], *, quantile: float = 0.5,
+                topic: str = "/imu0") -> str:
+    """Kalibr/OpenVINS ``imu.yaml`` text (gyroscope keys) from one Allan document per axis."""
+    rows = []
+    for doc, src in docs:
+        terms = _terms(doc, src)
+        key = quantile_key(quantile, float(doc.get("ci", 0.9)), src)
+        for t in ("N", "K"):
+            if terms.get(t) is None:
+                raise NoiseExportError(f"the document has no {t} term", file=src,
+                                       column=f"fit.terms.{t}", fix="fit the five-term model")
+        rows.append((src, float(doc["fs"]), terms["N"][key] * TO_SI["N"][0],
+                     terms["K"][key] * TO_SI["K"][0]))
+    rates = {r[1] for r in rows}
+    if len(rates) > 1:
+        raise NoiseExportError(f"the axes were recorded at different rates {sorted(rates)} Hz",
+                               file=docs[1][1], column="fs", fix="export each sensor alone")
+    n_max, k_max = max(r[2] for r in rows), max(r[3] for r in rows)
+    what = {"value": "the estimate (quantile 0.5)", "low": f"quantile {quantile:g}",
+            "high": f"quantile {quantile:g}"}[key]
+    lines = ["# IMU noise model for Kalibr / OpenVINS, written by fogbayes export",
+             "# continuous-time densities in SI units (docs/units.md):",
+             "#   gyroscope_noise_density = N (angle random walk)  [rad/s/sqrt(Hz)]",
+             "#   gyroscope_random_walk   = K (rate random walk)   [rad/s^2/sqrt(Hz)]",
+             f"# each is {what} of the fogbayes Allan fit"
+             + (" ; the largest of the axes:" if len(rows) > 1 else ":")]
+    for src, _, n, k in rows:
+        lines.append(f"#   {src}: N = {n:.6e}, K = {k:.6e}")
+    lines.append("# the accelerometer keys are not written: fogbayes fitted the gyroscope only")
+    lines += [f"rostopic: {topic}", f"update_rate: {rows[0][1]:.9g}",
+              f"gyroscope_noise_density: {n_max:.9e}", f"gyroscope_random_walk: {k_max:.9e}"]
+    return "\n".join(lines) + "\n"
