@@ -82,3 +82,15 @@ def test_identified_alphas_equal_the_reference(kind, dev):
     hadamard = dev == "ohdev"
     want = reference_alphas(y, ms, 3 if hadamard else 2, -4 if hadamard else -2)
     assert identify_alphas(y, ms, kind=dev).tolist() == want
+
+
+@pytest.mark.parametrize("n", [5, 6, 9, 257, 10_001])
+def test_vectorised_sums_equal_the_recurrence_loop(n):
+    """The SIMD form (shifted slices, no NaN) gives the recurrence loop's sums; a NaN sends
+    lag1_sums to the NaN-skipping loop."""
+    from fogbayes.stats.noise_id_sums import _lag1_sums, _lag1_sums_dense
+
+    z = np.cumsum(np.random.default_rng(n).normal(size=n)) + 1e3
+    np.testing.assert_allclose(_lag1_sums_dense(z), _lag1_sums(z), rtol=1e-12, atol=1e-9)
+    z[n // 2] = np.nan
+    np.testing.assert_array_equal(lag1_sums(z), _lag1_sums(z))

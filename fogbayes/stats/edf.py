@@ -23,8 +23,10 @@ and stride factor ``S`` (``m`` overlapping, 1 non-overlapping):
     \frac{1}{\nu} = \frac{1}{M s_z(0)^2}\Big[s_z(0)^2 + (1 - J/M)\,s_z(J/S)^2
         + 2\sum_{j=1}^{J-1} (1 - j/M)\,s_z(j/S)^2\Big].
 
-The sum is evaluated exactly (not with Greenhall's tables) up to 20 000 terms and as a
-Riemann sum with a coarser integer stride beyond (relative error ~1e-4). As in Greenhall's
+The sum is evaluated exactly (not with Greenhall's tables) up to 2 000 terms; beyond, the
+integers next to each kink of s_z exactly and the smooth stretches between them as integrals
+by graded Gauss-Legendre quadrature with Euler-Maclaurin's first end correction (relative
+error against the exact sum at most 1.6e-6, flicker phase alpha = 1; 1e-7 for the others). As in Greenhall's
 "case 2b", unmodified variances with alpha <= 0 and ``m (d + 1) > 100`` use ``F = infinity``
 (the continuous-time limit, which avoids cancellation in ``s_x`` at large ``m``).
 
@@ -39,8 +41,9 @@ import numpy as np
 from scipy import special
 
 D_OF_KIND = {"oadev": 2, "adev": 2, "mdev": 2, "ohdev": 3, "hdev": 3}
-_EXACT_TERMS = 20_000
-_NEAR = 2  # integers taken one by one around each kink: +- _NEAR strides
+_EXACT_TERMS = 2_000
+_NEAR = 16  # integers taken one by one on each side of each kink of s_z
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(10)
 _F_INF_LIMIT = 100  # Greenhall's J_max: above m (d+1) > 100 use F = infinity (alpha <= 0)
 
 
@@ -88,31 +91,57 @@ def _layout(d: int, m: int, n_phase: int, overlapping: bool, modified: bool):
     return S, M, J
 
 
+def _graded_nodes(lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights of the integral over [lo, hi], in pieces that double
+    in width away from both ends (s_z is smooth inside a stretch but, for odd alpha, has
+    t^k ln|t| kinks just beyond its ends)."""
+    half = 0.5 * (hi - lo)
+    steps = [0.0]
+    w = 1.0
+    while steps[-1] + w < half:
+        steps.append(steps[-1] + w)
+        w *= 2.0
+    steps.append(half)
+    left = lo + np.asarray(steps)
+    edges = np.concatenate([left, (hi - (left - lo))[-2::-1]])
+    a, b = edges[:-1, None], edges[1:, None]
+    nodes = 0.5 * (a + b) + 0.5 * (b - a) * _GL_X
+    return nodes.ravel(), (0.5 * (b - a) * _GL_W).ravel()
+
+
 def _inner_points(n_inner: int, S: float) -> tuple[np.ndarray, np.ndarray]:
     """Points j (and weights) standing for the integers 1..n_inner of the basic sum.
 
     Up to :data:`_EXACT_TERMS` integers every one is taken. Beyond, s_z(j/S) is smooth
     between integer t = j/S but has kinks there (and, for alpha = 2, its whole mass: a
-    spike of width 1/F at each integer), so the integers within 2q of each multiple of S
-    are taken one by one and each stretch between them by a midpoint rule of stride ~q.
+    spike of width 1/F at each integer), so the :data:`_NEAR` integers on each side of each
+    kink (t = 0, 1, 2, ...) are taken one by one, and each stretch a..b between them stands
+    for the integral over [a - 1/2, b + 1/2] plus Euler-Maclaurin's first end correction
+    (-f'/24 at each end), the integral taken by graded Gauss-Legendre: a few hundred points
+    instead of up to 3 S.
     """
     if n_inner <= _EXACT_TERMS:
         j = np.arange(1, n_inner + 1, dtype=float)
         return j, np.ones_like(j)
-    q = -(-n_inner // _EXACT_TERMS)
-    w = _NEAR * q
-    near = [np.arange(max(1, int(np.ceil(c - w))), min(n_inner, int(np.floor(c + w))) + 1)
-            for c in S * np.arange(1, int(n_inner // S) + 1)]
-    near = np.unique(np.concatenate(near)) if near else np.zeros(0, dtype=np.int64)
+    kinks = S * np.arange(0, int(n_inner // S) + 1)
+    near = np.concatenate([np.arange(max(1, int(np.ceil(c - _NEAR))),
+                                     min(n_inner, int(np.floor(c + _NEAR))) + 1) for c in kinks])
+    near = np.unique(near)
     bounds = np.concatenate([[0], near, [n_inner + 1]])
     pts, wts = [near.astype(float)], [np.ones(near.size)]
     for a, b in zip(bounds[:-1] + 1, bounds[1:] - 1):  # far stretches a..b
         if b < a:
             continue
-        span = b - a + 1
-        k = -(-span // q)
-        pts.append(a - 0.5 + (np.arange(k) + 0.5) * span / k)
-        wts.append(np.full(k, span / k))
+        if b - a < 4 * _NEAR:  # short: every integer
+            j = np.arange(a, b + 1, dtype=float)
+            pts.append(j)
+            wts.append(np.ones(j.size))
+            continue
+        x, w = _graded_nodes(a - 0.5, b + 0.5)
+        # Euler-Maclaurin's first correction, -(f'(b + 1/2) - f'(a - 1/2)) / 24, with each
+        # derivative a central difference over the neighbouring integers
+        pts.append(np.concatenate([x, [b + 1.0, b, a, a - 1.0]]))
+        wts.append(np.concatenate([w, np.array([-1.0, 1.0, 1.0, -1.0]) / 24.0]))
     return np.concatenate(pts), np.concatenate(wts)
 
 

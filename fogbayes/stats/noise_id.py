@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .noise_id_sums import lag1_from_sums, lag1_sums
+from .noise_id_sums import lag1_from_sums, lag1_sums, pair_means
 
 MIN_POINTS = 30
 #: From this many cluster means on, the lag-1 sums come from one compiled pass
@@ -44,8 +44,8 @@ def _block_means(z: np.ndarray, m_prev: int, m: int) -> np.ndarray:
     """Means of clusters of ``m`` samples from the means ``z`` of clusters of ``m_prev``."""
     f = m // m_prev
     n_cl = z.size // f
-    if f == 2:  # octave grids: two strided reads, 3-4x faster than a reshape mean
-        return 0.5 * (z[0:2 * n_cl:2] + z[1:2 * n_cl:2])
+    if f == 2:  # octave grids: one compiled pass (pair_means), ~10x a reshape mean
+        return pair_means(z) if z.size >= FUSED_MIN else 0.5 * (z[0:2 * n_cl:2] + z[1:2 * n_cl:2])
     return z[:n_cl] if f == 1 else z[:n_cl * f].reshape(n_cl, f).mean(axis=1)
 
 
