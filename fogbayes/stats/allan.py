@@ -41,7 +41,9 @@ from .taus import cluster_sizes
 #: From this many samples on, a single record's noise identification runs on a thread
 #: beside the variance computation (below it, the thread's start costs more than it saves).
 PARALLEL_NOISE_ID = 1 << 18
-_NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-noise-id")
+#: Share of an octave grid's taus (the longest) computed on the worker beside the rest.
+LONG_TAU_SHARE = 0.35
+_NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-allan-worker")
 
 
 class AllanDeviation(NamedTuple):
@@ -77,7 +79,12 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
         kind: ``oadev`` (overlapping Allan, default), ``adev``, ``mdev``, ``ohdev``, ``hdev``,
             ``tdev`` (time deviation tau MDEV / sqrt(3), NIST SP 1065 eq. 17: in the unit
             of ``y`` times seconds -- seconds for fractional frequency, deg/h * s = 1/3600
-            deg for a gyro in deg/h; its intervals and noise types are the MDEV ones).
+            deg for a gyro in deg/h; its intervals and noise types are the MDEV ones),
+            or a total deviation handled by :func:`fogbayes.stats.total.total_deviation`:
+            ``totdev`` (NIST SP 1065 eq. 25), ``mtotdev`` (eq. 27), ``ttotdev``
+            (tau MTOTDEV / sqrt(3)) and ``theo1`` (eq. 30; even m, tau = 0.75 m / fs),
+            with their own EDF (SP 1065 Tables 7, 8, Theo1 fits); no NaN gaps for these,
+            ``method`` is not used and ``taus`` takes the same grids.
         per_decade: points per decade of the ``dense`` grid.
         m_max: largest cluster size (default: Stable32's stop ratio, see ``taus``).
         ci: two-sided confidence of ``dev_low``/``dev_high`` (0.683 for Stable32's 1 sigma).
@@ -88,6 +95,11 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             :func:`~fogbayes.stats.allan_kernels.allan_sums` (``direct``, ``chunked``,
             ``mapped``).
     """
+    if kind in ("totdev", "mtotdev", "ttotdev", "theo1"):  # total family (own module)
+        from .total import total_deviation
+
+        return total_deviation(y, fs, taus=taus, kind=kind, ci=ci, m_max=m_max,
+                               per_decade=per_decade)
     if kind == "tdev":  # TDEV^2 = tau^2 Mod AVAR / 3: the modified variance, rescaled
         r = allan_deviation(y, fs, taus=taus, kind="mdev", per_decade=per_decade, m_max=m_max,
                             ci=ci, method=method)
@@ -100,7 +112,7 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
                             fix="pass one sensor as (n,) or a batch as (sensors, n)")
     if kind not in KINDS:
         raise FogbayesError(f"unknown deviation '{kind}'",
-                            fix=f"use one of {', '.join(KINDS)}, tdev")
+                            fix=f"use one of {', '.join(KINDS)}, tdev, totdev, mtotdev, ttotdev, theo1")
     if not (np.isfinite(fs) and fs > 0):
         raise FogbayesError(f"sample rate must be positive and finite, got {fs}",
                             fix="pass fs in Hz")
@@ -126,7 +138,8 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             method == "blocked" or jax_on_cpu()):
         # CPU: the cache-blocked NumPy accumulators (Haar pyramid on octave grids), the
         # same estimator to ~1e-12 and 2-3x faster than the XLA kernels here (allan_blocked)
-        var, count = allan_variance_fast(y, ms)
+        var, count = _oadev_two_threads(y, ms) if alphas is not None else \
+            allan_variance_fast(y, ms)
     elif kind in ("mdev", "ohdev") and method == "auto" and jax_on_cpu():
         # CPU: one fused compiled pass per tau from the phase (allan_fused), ~6-8x the
         # XLA kernels here; a batch runs row by row
@@ -159,6 +172,25 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     return AllanDeviation(kind, float(fs), np.asarray(ms) / fs, np.asarray(ms), var,
                           np.sqrt(var), count, excluded, alpha, edf, np.sqrt(lo), np.sqrt(hi),
                           float(ci), int(n), n_missing, note)
+
+
+def _oadev_two_threads(y: np.ndarray, ms: tuple[int, ...]):
+    """Octave grid of a long record: the pyramid's short taus here, the longest taus by the
+    phase window on the worker (queued after the noise identification), so both cores work.
+
+    A pyramid level and a phase-window tau cost about the same per sample, but the pyramid
+    must walk every level below the longest; the worker takes :data:`LONG_TAU_SHARE` of the
+    taus (balanced against the noise identification it runs first).
+    """
+    from .allan_blocked import is_octave
+
+    k = len(ms) - int(round(LONG_TAU_SHARE * len(ms)))
+    if not is_octave(ms) or k < 1 or k >= len(ms):
+        return allan_variance_fast(y, ms)
+    long = _NOISE_ID.submit(allan_variance_fast, y, ms[k:], pyramid=False)
+    v_short, c_short = allan_variance_fast(y, ms[:k])
+    v_long, c_long = long.result()
+    return np.concatenate([v_short, v_long]), np.concatenate([c_short, c_long])
 
 
 def _grid(n, taus, kind, per_decade, m_max) -> tuple[int, ...]:

@@ -1,0 +1,159 @@
+r"""Equivalent degrees of freedom of TOTDEV, MTOTDEV and Theo1 (NIST SP 1065, sec. 5.3).
+
+``N`` is the number of phase points (``n + 1`` for ``n`` rate samples) and ``m`` the
+averaging factor throughout; ``alpha`` is the power-law exponent of the rate PSD
+(+2 white PM, +1 flicker PM, 0 white FM, -1 flicker FM, -2 random-walk FM). A formula that
+gives no positive value (outside the range it was fitted for, e.g. Theo1 near ``m = N``)
+returns NaN, and so do the chi-square bounds built on it.
+
+**TOTDEV** (SP 1065 Table 7, Howe): :math:`\nu = b\,(T/\tau) - c` with ``T / tau = N / m``
+(as allantools' ``edf_totdev``; ``(N-1)/m`` differs by one sample in ``N``):
+
+    ==========  ====  ====
+    alpha        b     c
+    ==========  ====  ====
+     0 (WFM)    1.50  0.00
+    -1 (FFM)    1.17  0.22
+    -2 (RWFM)   0.93  0.36
+    ==========  ====  ====
+
+For white and flicker PM (alpha = 2, 1), for which the table has no entry, the simple AVAR
+approximations of SP 1065 Table 5 (Stein):
+:math:`\nu = (N+1)(N-2m) / (2(N-m))` (alpha = 2) and
+:math:`\nu = \exp\sqrt{\ln\frac{N-1}{2m}\,\ln\frac{(2m+1)(N-1)}{4}}` (alpha = 1). That is
+what Stable32 does: its printed 68.3 % TOTDEV intervals of the OCXO record at alpha = 1
+(m = 1, 2, 8) are reproduced to 6e-5 this way and not by Greenhall's OADEV EDF (1.6e-3 off
+at m = 8); allantools' ``edf_totdev`` falls back to the same formulas.
+
+**MTOTDEV / TTOTDEV** (SP 1065 Table 8): :math:`\nu = b\,(T/\tau) - c`, ``T / tau = N / m``:
+
+    ==========  ====  ====
+    alpha        b     c
+    ==========  ====  ====
+     2 (WPM)    1.90  2.10
+     1 (FPM)    1.20  1.40
+     0 (WFM)    1.10  1.20
+    -1 (FFM)    0.85  0.50
+    -2 (RWFM)   0.75  0.31
+    ==========  ====  ====
+
+**Theo1** (SP 1065 Table 11, Howe & Tasset), with :math:`\tau = 0.75\,m` (in units of
+``tau0``, the Theo1 averaging time):
+
+.. math::
+
+    \nu_{WPM} &= \frac{0.86 (N+1)(N - 4\tau/3)}{N - \tau}\,\frac{\tau}{\tau + 1.14} \\
+    \nu_{FPM} &= \frac{4.798 N^2 - 6.374 N\tau + 12.387\tau}{\sqrt{\tau + 36.6}\,(N-\tau)}
+                 \,\frac{\tau}{\tau + 0.3} \\
+    \nu_{WFM} &= \Big(\frac{4.1 N + 0.8}{\tau} - \frac{3.1 N + 6.5}{N}\Big)
+                 \frac{\tau^{3/2}}{\tau^{3/2} + 5.2} \\
+    \nu_{FFM} &= \frac{2 N^2 - 1.3 N\tau - 3.5\tau}{N\tau}\,\frac{\tau^3}{\tau^3 + 2.3} \\
+    \nu_{RWFM} &= \frac{4.4 N - 2}{2.9\tau}\,
+                 \frac{(4.4N-1)^2 - 8.6\tau(4.4N-1) + 11.4\tau^2}{(4.4N-3)^2}
+
+(the same fits written in ``m`` in Howe, Metrologia 43 (2006) S322, agree to the rounding of
+their constants, < 1.5 %; allantools 2024.6 has no Theo1 EDF).
+
+**Theo1 bias** (SP 1065 sec. 5.2.14, Howe & Tasset): Theo1 estimates the Allan variance at
+``tau = 0.75 m tau0`` with a noise-dependent bias, :math:`\mathrm{AVAR}/\mathrm{Theo1} =
+a + b/\tau^c` (``tau = 0.75 m``): WPM (0.09, 0.74, 0.40), FPM (0.14, 0.82, 0.30),
+WFM (1, 0, 0), FFM (1.87, -1.05, 0.79), RWFM (2.70, -1.53, 0.85).
+
+**TOTDEV bias** (SP 1065 sec. 5.2.11): :math:`E[\mathrm{TOTVAR}]/\mathrm{AVAR} = 1 - a\,\tau/T`
+with ``a = 1/(3 ln 2) = 0.481`` (FFM), ``0.750`` (RWFM), 0 otherwise (``T = n tau0``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+TOTDEV_TABLE = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}
+MTOTDEV_TABLE = {2: (1.90, 2.10), 1: (1.20, 1.40), 0: (1.10, 1.20), -1: (0.85, 0.50),
+                 -2: (0.75, 0.31)}
+THEO1_BIAS = {2: (0.09, 0.74, 0.40), 1: (0.14, 0.82, 0.30), 0: (1.0, 0.0, 0.0),
+              -1: (1.87, -1.05, 0.79), -2: (2.70, -1.53, 0.85)}
+TOTVAR_BIAS = {-1: 1.0 / (3.0 * math.log(2.0)), -2: 0.750}
+
+
+def _positive(v: float) -> float:
+    return float(v) if np.isfinite(v) and v > 0 else float("nan")
+
+
+def edf_avar_simple(alpha: int, m: int, N: int) -> float:
+    """SP 1065 Table 5 (Stein) approximations for white and flicker PM (``N`` phase points)."""
+    N, m = float(N), float(m)
+    if alpha == 2:
+        return _positive((N + 1) * (N - 2 * m) / (2 * (N - m)))
+    if alpha == 1:
+        a, b = (N - 1) / (2 * m), (2 * m + 1) * (N - 1) / 4
+        if a <= 1 or b <= 1:  # a log turns negative: no EDF
+            return float("nan")
+        return _positive(math.exp(math.sqrt(math.log(a) * math.log(b))))
+    raise ValueError(f"edf_avar_simple covers alpha = 2, 1 only, got {alpha}")
+
+
+def edf_totdev(alpha: int, m: int, N: int) -> float:
+    """TOTDEV EDF (module doc) for noise ``alpha`` at averaging factor ``m``, ``N`` phase points.
+
+    Example:
+        >>> round(edf_totdev(0, 10, 1001), 3)     # 1.5 * 1001 / 10
+        150.15
+    """
+    alpha = int(alpha)
+    if alpha in TOTDEV_TABLE:
+        b, c = TOTDEV_TABLE[alpha]
+        return _positive(b * N / m - c)
+    return edf_avar_simple(alpha, m, N)
+
+
+def edf_mtotdev(alpha: int, m: int, N: int) -> float:
+    """MTOTDEV (and TTOTDEV) EDF, SP 1065 Table 8: ``b N / m - c``."""
+    b, c = MTOTDEV_TABLE[int(alpha)]
+    return _positive(b * N / m - c)
+
+
+def edf_theo1(alpha: int, m: int, N: int) -> float:
+    """Theo1 EDF (module doc), ``tau = 0.75 m``, ``N`` phase points."""
+    t, N, alpha = 0.75 * float(m), float(N), int(alpha)
+    if alpha == 2:
+        v = 0.86 * (N + 1) * (N - 4.0 * t / 3.0) / (N - t) * t / (t + 1.14)
+    elif alpha == 1:
+        v = ((4.798 * N * N - 6.374 * N * t + 12.387 * t) / (math.sqrt(t + 36.6) * (N - t))
+             * t / (t + 0.3))
+    elif alpha == 0:
+        v = ((4.1 * N + 0.8) / t - (3.1 * N + 6.5) / N) * t**1.5 / (t**1.5 + 5.2)
+    elif alpha == -1:
+        v = (2 * N * N - 1.3 * N * t - 3.5 * t) / (N * t) * t**3 / (t**3 + 2.3)
+    elif alpha == -2:
+        x = 4.4 * N
+        v = (x - 2) / (2.9 * t) * ((x - 1) ** 2 - 8.6 * t * (x - 1) + 11.4 * t * t) / (x - 3) ** 2
+    else:
+        raise ValueError(f"Theo1 EDF covers alpha = -2..2, got {alpha}")
+    return _positive(v)
+
+
+_EDF = {"totdev": edf_totdev, "mtotdev": edf_mtotdev, "ttotdev": edf_mtotdev,
+        "theo1": edf_theo1}
+
+
+def edf_for_total_kind(alphas, ms, n: int, kind: str) -> np.ndarray:
+    """EDF per averaging factor for ``n`` rate samples (``N = n + 1`` phase points)."""
+    f = _EDF[kind]
+    return np.array([f(int(a), int(m), n + 1) for a, m in zip(alphas, ms)], dtype=float)
+
+
+def theo1_bias_ratio(alphas, ms) -> np.ndarray:
+    """AVAR / Theo1 (the factor that removes Theo1's bias) for noise ``alpha`` at ``m``."""
+    out = []
+    for a, m in zip(alphas, ms):
+        p, q, r = THEO1_BIAS[int(a)]
+        out.append(p + q / (0.75 * float(m)) ** r)
+    return np.array(out, dtype=float)
+
+
+def totvar_bias_ratio(alphas, ms, n: int) -> np.ndarray:
+    """AVAR / E[TOTVAR] = 1 / (1 - a m / n) for noise ``alpha`` (``T = n tau0``)."""
+    return np.array([1.0 / (1.0 - TOTVAR_BIAS.get(int(a), 0.0) * float(m) / n)
+                     for a, m in zip(alphas, ms)], dtype=float)

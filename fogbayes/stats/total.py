@@ -1,0 +1,249 @@
+r"""Total deviations TOTDEV, MTOTDEV, TTOTDEV and Theo1 with EDF and chi-square intervals.
+
+:func:`total_deviation` returns the same :class:`~fogbayes.stats.allan.AllanDeviation`
+record as :func:`~fogbayes.stats.allan.allan_deviation` (which dispatches these kinds
+here). Rate samples :math:`y_0 \dots y_{n-1}` at ``fs``, ``tau0 = 1/fs``, phase
+:math:`x_k = \tau_0 \sum_{j<k} y_j` (``N = n + 1`` points), averaging factor ``m``.
+
+* ``totdev`` (NIST SP 1065 sec. 5.2.11, eq. 25): the phase extended by odd reflection about
+  both end points, :math:`x^*_{1-j} = 2x_1 - x_{1+j}`, :math:`x^*_{N+j} = 2x_N - x_{N-j}`
+  (``j = 1..N-2``), and
+
+  .. math:: \mathrm{Tot\,var}(\tau) = \frac{1}{2\tau^2 (N-2)} \sum_{i=2}^{N-1}
+      (x^*_{i-m} - 2x^*_i + x^*_{i+m})^2, \qquad \tau = m\tau_0,\ 1 \le m \le N-1.
+
+  ``n_terms`` = N - 2 (Stable32's "#"). Default grids stop at ``m = N // 2`` (T/2,
+  Stable32's stop ratio 2); explicit ``m`` up to ``N - 1`` are accepted.
+* ``mtotdev`` (sec. 5.2.12, eq. 27): for each of the ``N - 3m + 1`` subsequences of ``3m``
+  phase points, remove the half-average slope, extend by even (uninverted) reflection to
+  ``9m`` points :math:`x^\#` and average the ``6m`` squared second differences of ``m``-point
+  means:
+
+  .. math:: \mathrm{Mod\,Tot\,var}(\tau) = \frac{1}{2\tau^2 (N-3m+1)} \sum_{n=1}^{N-3m+1}
+      \frac{1}{6m} \sum_{i=n-3m}^{n+3m-1} \Big[\frac{1}{m}\sum_{k=i}^{i+m-1}
+      (x^\#_k - 2x^\#_{k+m} + x^\#_{k+2m})\Big]^2, \qquad 1 \le m \le N/3.
+
+  ``n_terms`` = N - 3m + 1 (subsequences).
+* ``ttotdev`` (sec. 5.2.13, eq. 28): :math:`\sigma_{TTOT}(\tau) = \tau\,
+  \mathrm{Mod}\sigma_{TOT}(\tau)/\sqrt 3` (``tau^2/3`` on the variance; SP 1065's printed
+  ``tau^3`` is a typo, as allantools notes), in the unit of ``y`` times seconds; intervals,
+  noise types and EDF are MTOTDEV's (as ``tdev`` from ``mdev``).
+* ``theo1`` (sec. 5.2.14, eq. 30): see :mod:`~fogbayes.stats.theo1`; ``m`` even,
+  ``2 <= m <= N - 1``, **tau = 0.75 m tau0** (``AllanDeviation.m`` holds m, ``tau`` the
+  Theo1 averaging time; allantools reports ``m tau0`` as its tau), ``n_terms`` = N - m.
+
+Grids (``taus``): ``"octave"`` (m = 1, 2, 4, ...; Theo1 2, 4, 8, ...), ``"decade"``
+(1, 2, 4, 10, 20, ...), ``"dense"`` (``per_decade`` log-spaced), ``"all"`` (every m; every
+even m for Theo1), or explicit averaging factors. ``m_max`` caps a named grid (default: the
+largest valid m, for TOTDEV N // 2).
+
+Noise type per tau: the lag-1 autocorrelation of :func:`~fogbayes.stats.noise_id.identify_alphas`
+at cluster size ``m`` (TOTDEV: the oadev rules; MTOTDEV/TTOTDEV: the mdev rules; Theo1: at
+``round(0.75 m)``, the averaging time it estimates), carried forward where fewer than 30
+cluster means remain. EDF: :mod:`~fogbayes.stats.edf_total` (SP 1065 Tables 7, 8 and the
+Theo1 fits); interval :func:`~fogbayes.stats.edf.chi2_interval` at confidence ``ci``.
+
+Missing samples (NaN) are refused: the reflected extensions have no definition across a gap.
+
+Speed (O(N) per tau for TOTDEV, O(N m) for MTOTDEV and Theo1, compiled): see
+``benchmarks/bench_total.py``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import FogbayesError, TooShortError
+from .edf import chi2_interval
+from .edf_total import edf_for_total_kind, theo1_bias_ratio, totvar_bias_ratio
+from .noise_id import identify_alphas
+from .taus import GRIDS, TauGridError
+from .theo1 import theo1_limit, theo1_variance
+from .total_loops import mtotvar_sums, phase_samples, prefix2, totvar_sums
+
+__all__ = ["KINDS", "total_deviation", "total_grid", "total_variance"]
+
+KINDS = ("totdev", "mtotdev", "ttotdev", "theo1")
+_NOTES = {
+    "totdev": "TOTDEV (SP 1065 eq. 25, reflected phase); EDF SP 1065 Table 7 (alpha 0..-2), "
+              "Table 5 (alpha 2, 1); noise type: lag-1 ACF (oadev rules)",
+    "mtotdev": "MTOTDEV (SP 1065 eq. 27); EDF SP 1065 Table 8; noise type: lag-1 ACF "
+               "(mdev rules)",
+    "theo1": "Theo1 (SP 1065 eq. 30), tau = 0.75 m tau0; EDF: SP 1065 Theo1 fits; noise "
+             "type: lag-1 ACF at m' = round(0.75 m)",
+}
+
+
+def _limits(n: int, kind: str) -> tuple[int, int]:
+    """(largest valid m, default top of a named grid) for ``n`` rate samples."""
+    N = n + 1
+    if kind == "totdev":
+        return n, N // 2
+    if kind == "mtotdev":
+        return N // 3, N // 3
+    top = theo1_limit(n)
+    return top, top
+
+
+def total_grid(n: int, taus="octave", kind: str = "totdev", *, m_max: int | None = None,
+               per_decade: int = 20) -> tuple[int, ...]:
+    """Averaging factors for ``n`` rate samples (module doc); Theo1 keeps even m only."""
+    kind = "mtotdev" if kind == "ttotdev" else kind
+    limit, top = _limits(n, kind)
+    lo = 2 if kind == "theo1" else 1
+    if not isinstance(taus, str):
+        ms = np.unique(np.asarray(taus, dtype=np.int64).reshape(-1))
+        if ms.size == 0 or ms[0] < lo or ms[-1] > limit or (kind == "theo1" and (ms % 2).any()):
+            what = "even averaging factors in" if kind == "theo1" else "averaging factors in"
+            raise TooShortError(f"{kind} needs {what} {lo}..{limit} for {n} samples",
+                                column="taus", fix="pass smaller cluster sizes (samples, not s)")
+        return tuple(int(m) for m in ms)
+    top = min(top if m_max is None else int(m_max), limit)
+    if top < lo:
+        raise TooShortError(f"no {kind} averaging factor lies in {lo}..{top} ({n} samples)",
+                            fix="record longer or raise m_max")
+    if taus == "octave":
+        ms = 2 ** np.arange(math.floor(math.log2(top)) + 1)
+    elif taus == "decade":
+        dec = 10 ** np.arange(math.floor(math.log10(top)) + 1)
+        ms = np.concatenate([dec, 2 * dec, 4 * dec])
+    elif taus == "dense":
+        if int(per_decade) < 1:
+            raise TauGridError(f"per_decade must be >= 1, got {per_decade}",
+                               fix="pass per_decade=20 (or another positive integer)")
+        k = np.arange(math.ceil(math.log10(top) * per_decade) + 1)
+        ms = np.round(10.0 ** (k / per_decade))
+        if kind == "theo1":
+            ms = 2 * np.round(ms / 2)
+    elif taus == "all":
+        ms = np.arange(lo, top + 1, 2 if kind == "theo1" else 1)
+    else:
+        raise TauGridError(f"unknown tau grid '{taus}'", column="taus",
+                           fix=f"use one of {', '.join(GRIDS)} or explicit cluster sizes")
+    ms = np.unique(ms.astype(np.int64))
+    keep = (ms >= lo) & (ms <= top) & ((ms % 2 == 0) if kind == "theo1" else True)
+    return tuple(int(m) for m in ms[keep])
+
+
+def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(var, count)`` of ``kind`` (totdev, mtotdev, theo1) at averaging factors ``ms``;
+    the variance is in the unit of ``y`` squared (module doc; ``y`` 1-D and finite)."""
+    if kind == "theo1":
+        return theo1_variance(y, ms)
+    y = np.ascontiguousarray(y, dtype=np.float64)
+    ms = np.asarray(ms, dtype=np.int64).reshape(-1)
+    if kind not in ("totdev", "mtotdev") or y.ndim != 1:
+        raise FogbayesError(f"total_variance takes 1-D data and totdev, mtotdev or theo1, got "
+                            f"'{kind}' and shape {y.shape}", fix="pass one sensor as (n,)")
+    N = y.size + 1
+    limit = _limits(y.size, kind)[0]
+    if ms.size == 0 or ms.min() < 1 or ms.max() > limit:
+        raise TooShortError(f"{kind} needs averaging factors in 1..{limit} for {y.size} "
+                            f"samples, got {ms.tolist()}", column="taus",
+                            fix="pass smaller cluster sizes (samples, not s)")
+    S = phase_samples(y, float(np.mean(y)))
+    sums = np.zeros(ms.size)
+    m = ms.astype(float)
+    if kind == "totdev":
+        totvar_sums(S, ms, sums)
+        count = np.full(ms.size, N - 2.0)
+        return sums / (2.0 * m * m * count), count
+    hi, lo = prefix2(S)  # mtotdev
+    mtotvar_sums(S, hi, lo, ms, sums)
+    count = N - 3.0 * m + 1.0
+    return sums / (12.0 * m**5 * count), count
+
+
+def total_deviation(y, fs: float, *, taus="octave", kind: str = "totdev", ci: float = 0.9,
+                    m_max: int | None = None, per_decade: int = 20,
+                    bias_corrected: bool = False):
+    """TOTDEV, MTOTDEV, TTOTDEV or Theo1 of rate samples ``y`` with chi-square intervals.
+
+    Args:
+        y: rate samples (shape (n,), or (batch, n) computed row by row), any unit; no NaN.
+        fs: sample rate in Hz.
+        taus: ``octave``, ``decade``, ``dense``, ``all`` or explicit averaging factors ``m``
+            (Theo1: even, tau = 0.75 m / fs).
+        kind: ``totdev``, ``mtotdev``, ``ttotdev`` or ``theo1`` (module doc).
+        ci: two-sided confidence of ``dev_low``/``dev_high`` (0.683 for Stable32's 1 sigma).
+        m_max: largest averaging factor of a named grid.
+        per_decade: points per decade of the ``dense`` grid.
+        bias_corrected: multiply the variance (and its interval) by AVAR / E[estimator] for
+            the identified noise type: Theo1 (:func:`~fogbayes.stats.edf_total.theo1_bias_ratio`)
+            and TOTDEV (flicker and random-walk FM,
+            :func:`~fogbayes.stats.edf_total.totvar_bias_ratio`); no correction exists here
+            for MTOTDEV/TTOTDEV (refused).
+
+    Returns:
+        :class:`~fogbayes.stats.allan.AllanDeviation` (``excluded`` zeros, ``n_missing`` 0).
+
+    Example:
+        >>> y = np.random.default_rng(0).normal(size=4096)    # white FM, 1 Hz
+        >>> r = total_deviation(y, 1.0, kind="totdev")
+        >>> r.m[:3].tolist(), bool(abs(r.dev[0] - 1) < 0.05), int(r.n_terms[0])
+        ([1, 2, 4], True, 4095)
+        >>> r = total_deviation(y, 1.0, kind="theo1", taus=[8, 16])
+        >>> r.tau.tolist()
+        [6.0, 12.0]
+    """
+    from .allan import AllanDeviation  # here: allan imports this module lazily
+
+    if kind not in KINDS:
+        raise FogbayesError(f"unknown total deviation '{kind}'", fix=f"use one of {', '.join(KINDS)}")
+    if kind == "ttotdev":  # TTOT var = tau^2 MTOT var / 3: the modified total variance, rescaled
+        if bias_corrected:
+            raise FogbayesError("no bias correction is implemented for ttotdev",
+                                fix="pass bias_corrected=False")
+        r = total_deviation(y, fs, taus=taus, kind="mtotdev", ci=ci, m_max=m_max,
+                            per_decade=per_decade)
+        f = r.tau / math.sqrt(3.0)
+        return r._replace(kind="ttotdev", var=r.var * f**2, dev=r.dev * f,
+                          dev_low=r.dev_low * f, dev_high=r.dev_high * f,
+                          note=r.note.replace("MTOTDEV (", "TTOTDEV = tau MTOTDEV / sqrt 3 (", 1))
+    if bias_corrected and kind == "mtotdev":
+        raise FogbayesError("no bias correction is implemented for mtotdev",
+                            fix="pass bias_corrected=False")
+    y = np.asarray(y, dtype=float)
+    if y.ndim not in (1, 2):
+        raise FogbayesError(f"rate data must be 1-D (or 2-D for a batch), got shape {y.shape}",
+                            fix="pass one sensor as (n,) or a batch as (sensors, n)")
+    if not (np.isfinite(fs) and fs > 0):
+        raise FogbayesError(f"sample rate must be positive and finite, got {fs}",
+                            fix="pass fs in Hz")
+    if not np.isfinite(y).all():
+        bad = int((~np.isfinite(y)).sum())
+        raise FogbayesError(
+            f"{kind} cannot handle missing or non-finite samples ({bad} NaN/inf): its "
+            "reflected extension of the phase is undefined across a gap",
+            fix="fill the gaps (e.g. interpolate), analyse the longest gap-free stretch, or "
+                "use kind='oadev'/'mdev', which exclude only the terms touching a gap")
+    n = y.shape[-1]
+    if n < 4:
+        raise TooShortError(f"{kind} needs at least 4 samples, got {n}", fix="record longer")
+    ms = total_grid(n, taus, kind, m_max=m_max, per_decade=per_decade)
+    rows = [_one(row, ms, kind, n, ci, bias_corrected) for row in (y if y.ndim == 2 else [y])]
+    pick = (lambda k: np.stack([r[k] for r in rows])) if y.ndim == 2 else (lambda k: rows[0][k])
+    var, count, alpha, edf, lo, hi = (pick(k) for k in range(6))
+    m = np.asarray(ms)
+    tau = (0.75 * m if kind == "theo1" else m.astype(float)) / fs
+    note = _NOTES[kind] + ("; bias-corrected to AVAR for the identified noise type"
+                           if bias_corrected else "") + "; no gaps"
+    return AllanDeviation(kind, float(fs), tau, m, var, np.sqrt(var), count,
+                          np.zeros_like(count), alpha, edf, np.sqrt(lo), np.sqrt(hi), float(ci),
+                          int(n), 0, note)
+
+
+def _one(y, ms, kind, n, ci, bias_corrected):
+    var, count = total_variance(y, ms, kind)
+    if kind == "theo1":
+        alpha = identify_alphas(y, [max(1, round(0.75 * m)) for m in ms], kind="oadev")
+    else:
+        alpha = identify_alphas(y, ms, kind="oadev" if kind == "totdev" else "mdev")
+    edf = edf_for_total_kind(alpha, ms, n, kind)
+    if bias_corrected:
+        var = var * (theo1_bias_ratio(alpha, ms) if kind == "theo1"
+                     else totvar_bias_ratio(alpha, ms, n))
+    lo, hi = chi2_interval(var, edf, ci)
+    return var, count, alpha, edf, lo, hi
