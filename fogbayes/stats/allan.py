@@ -41,9 +41,7 @@ from .taus import cluster_sizes
 #: From this many samples on, a single record's noise identification runs on a thread
 #: beside the variance computation (below it, the thread's start costs more than it saves).
 PARALLEL_NOISE_ID = 1 << 18
-#: Share of an octave grid's taus (the longest) computed on the worker beside the rest.
-LONG_TAU_SHARE = 0.35
-_NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-allan-worker")
+_NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-noise-id")
 
 
 class AllanDeviation(NamedTuple):
@@ -120,26 +118,33 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     if n < 3:
         raise TooShortError(f"the Allan deviation needs at least 3 samples, got {n}",
                             fix="record longer")
-    missing = ~np.isfinite(y)
-    if np.isinf(y).any():
-        raise FogbayesError("rate data contain +-inf", fix="mark missing samples as NaN")
-    n_missing = int(missing.sum())
-    if missing.all(axis=-1).any():
-        raise TooShortError("a sensor has no finite sample", fix="check the data")
+    n_missing = 0
+    if not np.isfinite(np.add.reduce(y, axis=-1)).all():  # else: one pass says all finite
+        missing = ~np.isfinite(y)
+        if np.isinf(y).any():
+            raise FogbayesError("rate data contain +-inf", fix="mark missing samples as NaN")
+        n_missing = int(missing.sum())
+        if missing.all(axis=-1).any():
+            raise TooShortError("a sensor has no finite sample", fix="check the data")
     if method == "blocked" and kind != "oadev":
         raise FogbayesError(f"method 'blocked' computes oadev only, not {kind}", column="method",
                             fix="use method='auto' for other kinds")
     ms = _grid(n, taus, kind, per_decade, m_max)
-    # The noise identification does not need the variances: on a long single record it runs
-    # on a second thread while they are computed (both release the GIL).
-    alphas = _NOISE_ID.submit(identify_alphas, y, ms, kind=kind) \
-        if y.ndim == 1 and n >= PARALLEL_NOISE_ID else None
+    # The noise identification does not need the variances, nor does the EDF of a record
+    # without gaps (its term counts are known): on a long single record both run on a
+    # second thread while the variances are computed (the compiled loops release the GIL).
+    worker = y.ndim == 1 and n >= PARALLEL_NOISE_ID
+    if worker and not n_missing:
+        early = _NOISE_ID.submit(_edf, y, ms, static_counts(n, ms, kind), kind)
+        alphas = None
+    else:
+        early = None
+        alphas = _NOISE_ID.submit(identify_alphas, y, ms, kind=kind) if worker else None
     if kind == "oadev" and method in ("auto", "blocked") and (
             method == "blocked" or jax_on_cpu()):
         # CPU: the cache-blocked NumPy accumulators (Haar pyramid on octave grids), the
         # same estimator to ~1e-12 and 2-3x faster than the XLA kernels here (allan_blocked)
-        var, count = _oadev_two_threads(y, ms) if alphas is not None else \
-            allan_variance_fast(y, ms)
+        var, count = allan_variance_fast(y, ms)
     elif kind in ("mdev", "ohdev") and method == "auto" and jax_on_cpu():
         # CPU: one fused compiled pass per tau from the phase (allan_fused), ~6-8x the
         # XLA kernels here; a batch runs row by row
@@ -163,7 +168,10 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             raise TooShortError("every cluster touches a gap", fix="use shorter taus or fill fewer gaps")
         if alphas is not None:  # identified on the full grid: keep the same taus
             alphas = _Done(alphas.result()[keep])
-    alpha, edf = _edf(y, ms, count, kind, alphas=None if alphas is None else alphas.result())
+    if early is not None:  # no gaps: the counts the worker used are the counts
+        alpha, edf = early.result()
+    else:
+        alpha, edf = _edf(y, ms, count, kind, alphas=None if alphas is None else alphas.result())
     lo, hi = chi2_interval(var, edf, ci)
     excluded = full - count
     note = ("no gaps" if not n_missing else
@@ -172,25 +180,6 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     return AllanDeviation(kind, float(fs), np.asarray(ms) / fs, np.asarray(ms), var,
                           np.sqrt(var), count, excluded, alpha, edf, np.sqrt(lo), np.sqrt(hi),
                           float(ci), int(n), n_missing, note)
-
-
-def _oadev_two_threads(y: np.ndarray, ms: tuple[int, ...]):
-    """Octave grid of a long record: the pyramid's short taus here, the longest taus by the
-    phase window on the worker (queued after the noise identification), so both cores work.
-
-    A pyramid level and a phase-window tau cost about the same per sample, but the pyramid
-    must walk every level below the longest; the worker takes :data:`LONG_TAU_SHARE` of the
-    taus (balanced against the noise identification it runs first).
-    """
-    from .allan_blocked import is_octave
-
-    k = len(ms) - int(round(LONG_TAU_SHARE * len(ms)))
-    if not is_octave(ms) or k < 1 or k >= len(ms):
-        return allan_variance_fast(y, ms)
-    long = _NOISE_ID.submit(allan_variance_fast, y, ms[k:], pyramid=False)
-    v_short, c_short = allan_variance_fast(y, ms[:k])
-    v_long, c_long = long.result()
-    return np.concatenate([v_short, v_long]), np.concatenate([c_short, c_long])
 
 
 def _grid(n, taus, kind, per_decade, m_max) -> tuple[int, ...]:

@@ -36,41 +36,33 @@ def is_octave(ms) -> bool:
     return bool(ms.size and np.all(ms > 0) and np.all((ms & (ms - 1)) == 0))
 
 
-def accumulator(ms, *, chunk: int = DEFAULT_CHUNK, pyramid: bool | None = None):
-    """The accumulator for ``ms`` and a function mapping its result onto ``ms``.
-
-    ``pyramid``: None picks the Haar pyramid for octave sets (it walks every level from
-    m = 1 up), False forces the phase window (the cost of a tau does not depend on the
-    smaller ones: how a thread takes the long taus of an octave set).
-    """
+def accumulator(ms, *, chunk: int = DEFAULT_CHUNK):
+    """The accumulator for ``ms`` and a function mapping its result onto ``ms``."""
     ms = tuple(int(m) for m in np.unique(np.asarray(ms, dtype=np.int64)))
-    if is_octave(ms) and pyramid is not False:
+    if is_octave(ms):
         acc = OctaveAccumulator(int(np.log2(ms[-1])) + 1, chunk=chunk)
         idx = np.log2(np.asarray(ms)).astype(int)
         return acc, ms, lambda s, c: (s[idx], c[idx])
     return PhaseAccumulator(ms, chunk=chunk), ms, lambda s, c: (s, c)
 
 
-def allan_variance_fast(y, ms, *, chunk: int = DEFAULT_CHUNK,
-                        pyramid: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+def allan_variance_fast(y, ms, *, chunk: int = DEFAULT_CHUNK) -> tuple[np.ndarray, np.ndarray]:
     """Overlapping AVAR and terms kept at cluster sizes ``ms`` of rate samples ``y``.
 
     ``y``: (n,) or (batch, n); NaN marks missing samples (every term touching one is
     excluded), +-inf is an error. ``ms`` are sorted and de-duplicated; each needs 2m <= n.
     Matches ``allan_variance(y, ms, kind="oadev")`` to rounding (about 1e-12 relative).
-    ``pyramid``: see :func:`accumulator`.
     """
     y = np.asarray(y, dtype=float)
     if y.ndim == 2:  # sensors on threads: the compiled steps release the GIL
         workers = max(1, min(len(y), os.cpu_count() or 1))
         with ThreadPoolExecutor(workers) as pool:
-            parts = list(pool.map(lambda row: allan_variance_fast(row, ms, chunk=chunk,
-                                                                  pyramid=pyramid), y))
+            parts = list(pool.map(lambda row: allan_variance_fast(row, ms, chunk=chunk), y))
         return np.stack([p[0] for p in parts]), np.stack([p[1] for p in parts])
     if y.ndim != 1:
         raise FogbayesError(f"rate data must be 1-D (or 2-D for a batch), got shape {y.shape}",
                             fix="pass one sensor as (n,) or a batch as (sensors, n)")
-    acc, ms, pick = accumulator(ms, chunk=chunk, pyramid=pyramid)
+    acc, ms, pick = accumulator(ms, chunk=chunk)
     if 2 * ms[-1] > y.size or ms[0] < 1:
         raise TooShortError(f"cluster sizes must lie in 1..{y.size // 2} for {y.size} samples",
                             column="taus", fix="pass smaller cluster sizes (samples, not s)")

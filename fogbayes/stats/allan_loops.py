@@ -142,6 +142,21 @@ def octave_step(y, offset, store, base, size, ring, ms, j0, sums, comps, nans):
                 keep[i] = src[i]
 
 
+@numba.njit(cache=True, nogil=True)
+def octave_feed(y, offset, store, base, size, ring, ms, n0, chunk, sums, comps, nans):
+    """:func:`octave_step` over all of ``y`` in steps that end on multiples of ``chunk``
+    (ring slots never wrap); returns the new sample count. One call, so the GIL stays
+    released for the whole record (a thread beside it runs Python code meanwhile)."""
+    a = 0
+    n = n0
+    while a < y.shape[0]:
+        w = min(y.shape[0] - a, chunk - n % chunk)
+        octave_step(y[a:a + w], offset, store, base, size, ring, ms, n, sums, comps, nans)
+        n += w
+        a += w
+    return n
+
+
 @numba.njit(cache=True, fastmath=_FAST)
 def _sumsq_phase(end, start, mid2):
     acc = 0.0
