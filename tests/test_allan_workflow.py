@@ -123,3 +123,14 @@ def test_posterior_document(rate_deg_h, doc_deg_h):
     assert fit["terms"]["N"]["value"] == pytest.approx(doc_deg_h["fit"]["terms"]["N"]["value"],
                                                        rel=0.02)
     assert fit["diagnostics"]["divergences"] < 10
+
+
+def test_constant_output_is_bad_input_not_a_crash(tmp_path):
+    """A stuck sensor: every Allan variance is zero; one line naming the file, exit 2."""
+    from fogbayes.cli import main
+    from fogbayes.data import Recording, save
+
+    path = tmp_path / "stuck.csv"
+    save(Recording(time=np.arange(3000) / 10.0, output=np.full(3000, 3.0), unit="deg/h"), path)
+    assert main(["-q", "allan", str(path), "--json", str(tmp_path / "a.json")]) == 2
+    assert not (tmp_path / "a.json").exists()

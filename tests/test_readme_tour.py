@@ -41,6 +41,6 @@ def test_readme_tour_runs_in_order(tmp_path):
     last = [ln for ln in r.stderr.splitlines() if ln.startswith("+ ")][-1:]
     assert r.returncode == 0, f"tour stopped at {last}: {r.stderr[-2000:]}"
     for made in ("demo_out/report.html", "fit.json", "compensated.csv", "report.html",
-                 "loop.json", "loop.html", "adev.json", "adev.png", "l2.json",
+                 "loop.json", "loop.html", "adev.json", "adev.png", "imu.yaml", "l2.json",
                  "fits/summary.json"):
         assert (tmp_path / made).stat().st_size > 0, made

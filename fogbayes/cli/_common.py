@@ -22,7 +22,10 @@ from ..errors import FogbayesError
 console = Console(stderr=True)
 QUIET = {"on": False}
 
-REC_ARG = typer.Argument(..., help="Recording file (.csv, .parquet or .npz).", show_default=False)
+REC_ARG = typer.Argument(..., help="Recording file (.csv, .parquet or .npz) or gyro log: PX4 "
+                                   ".ulg, ROS 1 .bag, ROS 2 bag folder/.db3/.mcap, ArduPilot "
+                                   ".bin (rates in rad/s; pip install 'fogbayes\\[logs]').",
+                         show_default=False)
 
 #: Options that say how to read a recording; the same names and help on every command.
 _INPUT = "Reading the recording"
@@ -58,6 +61,20 @@ TEMPERATURE_OFFSET_OPT = typer.Option(0.0, "--temperature-offset",
                                       help="Added after --temperature-scale (kelvin: -273.15).",
                                       rich_help_panel=_INPUT)
 
+#: Options for gyro logs only (fogbayes/data/logs, docs/logs.md); an error for other files.
+TOPIC_OPT = typer.Option(None, "--topic",
+                         help="Gyro logs: PX4 sensor_gyro (default) or sensor_combined; ROS "
+                              "the sensor_msgs/Imu topic (default: the only one), optionally "
+                              "',TEMPERATURE_TOPIC'; ArduPilot IMU, IMU2, ...",
+                         rich_help_panel=_INPUT, show_default=False)
+INSTANCE_OPT = typer.Option(None, "--instance", min=0,
+                            help="Gyro logs: the sensor instance (PX4 multi_id, ArduPilot IMU "
+                                 "number), default 0.",
+                            rich_help_panel=_INPUT, show_default=False)
+AXIS_OPT = typer.Option(None, "--axis",
+                        help="Gyro logs: the body axis read as the output: x (default), y or z.",
+                        rich_help_panel=_INPUT, show_default=False)
+
 
 def _quiet(value: bool) -> bool:
     """``--quiet`` after a subcommand: the same switch as ``fogbayes --quiet``."""
@@ -76,15 +93,18 @@ def load_recording(path: Path, *, column: str = "output", time_column: str = "ti
                    temperature: list[str] | None = None,
                    input_rate: str = "input_rate", time_unit: str = "s",
                    temperature_scale: float = 1.0,
-                   temperature_offset: float = 0.0) -> Recording:
-    """Load a Recording with the command line's column/unit overrides."""
+                   temperature_offset: float = 0.0, topic: str | None = None,
+                   instance: int | None = None, axis: str | None = None) -> Recording:
+    """Load a Recording with the command line's column/unit overrides (and, for a gyro
+    log, its ``--topic``, ``--instance`` and ``--axis``)."""
     from ..errors import ArgumentError
 
     try:
         return load(path, time=time_column, output=column, unit=output_unit,
                     scale_factor=scale_factor, temperature=temperature or None,
                     input_rate=input_rate, time_unit=time_unit,
-                    temperature_scale=temperature_scale, temperature_offset=temperature_offset)
+                    temperature_scale=temperature_scale, temperature_offset=temperature_offset,
+                    topic=topic, instance=instance, axis=axis)
     except ArgumentError as exc:  # name the command-line flag, not fogbayes.load's keyword
         flag = "--" + (exc.column or "").lstrip("-").replace("_", "-")
         if exc.column not in ("temperature_scale", "temperature_offset", "scale_factor"):

@@ -11,6 +11,7 @@ from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FAC
                       TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
                       write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
 @app.command()
@@ -34,6 +35,9 @@ def arma(
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
+    topic: str = TOPIC_OPT,
+    instance: int = INSTANCE_OPT,
+    axis: str = AXIS_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature_scale: float = TEMPERATURE_SCALE_OPT,
@@ -67,7 +71,8 @@ def arma(
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=output_unit, scale_factor=scale_factor,
                          time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset)
+                         temperature_offset=temperature_offset,
+                         topic=topic, instance=instance, axis=axis)
     with progress("fitting ARMA candidates"), about_file(rec_path):
         result = analyse_recording(rec, decimate=decimate, detrend_order=detrend,
                                    candidates=candidates, criterion=criterion, lags=lags,

@@ -16,6 +16,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, QUIET_OPT, REC_ARG, TEMPERATUR
                       TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
                       write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
 def read_fit(path: Path) -> dict:
@@ -113,6 +114,9 @@ def compensate(
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
+    topic: str = TOPIC_OPT,
+    instance: int = INSTANCE_OPT,
+    axis: str = AXIS_OPT,
     output_unit: str = typer.Option(None, "--output-unit", show_default=False,
                                     rich_help_panel="Reading the recording",
                                     help="Output unit; says which is right when the file's '# unit:' "
@@ -174,7 +178,8 @@ def compensate(
             output_unit=agreed_unit(fit_doc, str(params), rec, output_unit),
             scale_factor=scale_factor if scale_factor is not None else given.get("scale_factor"),
             temperature=temperature, input_rate=input_rate, time_unit=time_unit,
-            temperature_scale=temperature_scale, temperature_offset=temperature_offset)
+            temperature_scale=temperature_scale, temperature_offset=temperature_offset,
+            topic=topic, instance=instance, axis=axis)
         compensate_with_loop(fit_doc, recording, rec_path=rec, params=params, out=out,
                              json_out=json_out, run_events=run_events)
         return
@@ -191,6 +196,13 @@ def compensate(
     if stream:
         from ..stream import compensate_stream, open_source
 
+        from ..data.logs import is_log
+
+        if is_log(rec) or topic is not None or instance is not None or axis is not None:
+            raise FogbayesError("--stream reads .npz, .parquet and .npy files, not gyro logs",
+                                column="--stream",
+                                fix="drop --stream (a log is read into memory), or drop "
+                                    "--topic/--instance/--axis")
         if time_unit != "s" or temperature_scale != 1.0 or temperature_offset != 0.0:
             raise FogbayesError("--stream reads time in s and temperatures in deg C as they "
                                 "are", column="--stream",
@@ -218,7 +230,8 @@ def compensate(
                                else given.get("scale_factor"),
                                temperature=temperature, input_rate=input_rate,
                                time_unit=time_unit, temperature_scale=temperature_scale,
-                               temperature_offset=temperature_offset)
+                               temperature_offset=temperature_offset,
+                               topic=topic, instance=instance, axis=axis)
     check_channels(fit_doc, str(params), recording)
     with progress(f"compensating {recording.n} samples ({fit_doc['model']})"), about_file(rec):
         cols = wf.compensate_recording(recording, fit_doc)

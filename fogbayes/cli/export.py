@@ -40,13 +40,13 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
         if doc.get("model") != "bias-t":
             raise ExportError(f"firmware thermal parameters come from a bias-t fit, this is a "
                               f"{doc.get('model')!r} document", file=str(p), column="model",
-                              fix="fit '--model bias-t --order 3' (temperature only)")
+                              fix="run 'fogbayes fit REC --model bias-t --orders 3' (temperature only)")
         params = doc["params"]
         unit = (params.get("units") or {}).get("output", "deg/h")
         if unit != "deg/h":
             raise FogbayesError(f"the fit's output unit is {unit!r}, the export needs deg/h",
                                 file=str(p), column="params.units.output",
-                                fix="fit the recording with --output-unit set to its rate unit")
+                                fix="run 'fogbayes fit' with --output-unit set to the recording's rate unit")
         axes.append((basis_from_dict(params["basis"], source=str(p)), params["coef"]))
         spans.append((params.get("valid_range") or {}).get("T"))
     if all(s is not None for s in spans):

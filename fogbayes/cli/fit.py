@@ -17,6 +17,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
                       progress, refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
 #: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
@@ -148,6 +149,9 @@ def fit(
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
+    topic: str = TOPIC_OPT,
+    instance: int = INSTANCE_OPT,
+    axis: str = AXIS_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
@@ -180,7 +184,8 @@ def fit(
                                output_unit=output_unit, scale_factor=scale_factor,
                                temperature=temperature, input_rate=input_rate,
                                time_unit=time_unit, temperature_scale=temperature_scale,
-                               temperature_offset=temperature_offset)
+                               temperature_offset=temperature_offset,
+                               topic=topic, instance=instance, axis=axis)
     with progress(f"fitting {model} to {recording.n} samples" + (" (posterior)" if bayes else "")), \
             about_file(rec):
         doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,

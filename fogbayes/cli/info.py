@@ -12,6 +12,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
                       refuse_overwrite, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
 def summary_document(rec, rec_path) -> dict:
@@ -66,6 +67,9 @@ def info(
     input_rate: str = INPUT_RATE_OPT,
     temperature_scale: float = TEMPERATURE_SCALE_OPT,
     temperature_offset: float = TEMPERATURE_OFFSET_OPT,
+    topic: str = TOPIC_OPT,
+    instance: int = INSTANCE_OPT,
+    axis: str = AXIS_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Summarise a recording: samples, rate, gaps, temperature and output ranges.
@@ -76,13 +80,15 @@ def info(
       fogbayes info chamber_run.csv
       fogbayes info gyro.csv --output-unit deg/s --time-column t_s
       fogbayes info run.csv --json - > info.json
+      fogbayes info flight.ulg --instance 1 --axis z
     """
     refuse_overwrite({"the recording": rec_path}, {"--json": json_out})
     rec = load_recording(rec_path, column=column, time_column=time_column,
                          output_unit=output_unit, scale_factor=scale_factor,
                          temperature=temperature, input_rate=input_rate,
                          time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset)
+                         temperature_offset=temperature_offset,
+                         topic=topic, instance=instance, axis=axis)
     s = rec.sampling()
     if json_out:
         write_json(summary_document(rec, rec_path), json_out)

@@ -19,6 +19,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
                       progress, refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 #: Fewer samples than this give a loop without power that looks like a clean result:
 #: refused (the residual whiteness tests use up to 20 lags, 5 samples a lag).
@@ -47,6 +48,9 @@ def loop(
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
+    topic: str = TOPIC_OPT,
+    instance: int = INSTANCE_OPT,
+    axis: str = AXIS_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
@@ -87,7 +91,8 @@ def loop(
                          output_unit=output_unit, scale_factor=scale_factor,
                          temperature=temperature, input_rate=input_rate,
                          time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset)
+                         temperature_offset=temperature_offset,
+                         topic=topic, instance=instance, axis=axis)
     if rec.n < LOOP_MIN_SAMPLES:
         raise TooShortError(f"the closed loop needs at least {LOOP_MIN_SAMPLES} samples (20 "
                             f"blocks or more, residual tests over 20 lags), the recording has "

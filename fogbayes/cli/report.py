@@ -13,6 +13,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
                       progress, refuse_overwrite, say)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
 def _read_json(path: Path, what: str) -> dict:
@@ -41,6 +42,9 @@ def report(
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
+    topic: str = TOPIC_OPT,
+    instance: int = INSTANCE_OPT,
+    axis: str = AXIS_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
     temperature: list[str] = TEMPERATURE_OPT,
@@ -71,7 +75,8 @@ def report(
                          if fit_doc else output_unit, scale_factor=scale_factor,
                          temperature=temperature, input_rate=input_rate,
                          time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset)
+                         temperature_offset=temperature_offset,
+                         topic=topic, instance=instance, axis=axis)
     loop_res = None
     with progress("building the report"), about_file(rec_path):
         if loop_json:

@@ -1,4 +1,5 @@
-"""Load and save Recordings as CSV, Parquet or NPZ.
+"""Load and save Recordings as CSV, Parquet or NPZ; load gyro logs (PX4 ULog, ROS bags,
+MCAP, ArduPilot DataFlash: :mod:`fogbayes.data.logs`, docs/logs.md).
 
 Column contract (docs/DESIGN.md): ``time`` (s, strictly increasing), ``output`` (gyro output in
 ``unit``), ``temperature``, ``temperature_2``, ... (deg C), optional ``input_rate`` (deg/s).
@@ -8,6 +9,10 @@ CSV files may start with ``# key: value`` lines carrying metadata (``unit``,
 ``sensor_id``, ``sample_rate``, ``scale_factor``); :func:`save` writes them, so a CSV
 round trip keeps everything. Numbers are written with 17 significant digits (exact).
 Parquet keeps the metadata in the schema, NPZ in a ``__meta__`` JSON string.
+
+A log is read by :func:`fogbayes.data.logs.read_log` into the same columns (``time``,
+``output`` = the body axis picked, ``temperature``; rates in rad/s) and then checked like
+a file; ``topic``, ``instance`` and ``axis`` pick the gyro and its axis.
 """
 
 from __future__ import annotations
@@ -20,12 +25,14 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import EmptyRecordingError, FileFormatError, FogbayesError, MissingColumnError, NonNumericError
+from ..errors import (ArgumentError, EmptyRecordingError, FileFormatError, FogbayesError,
+                      MissingColumnError, NonNumericError)
 from ._read import Table, check_plausible, finite, meta_float, meta_text, meta_unit, time_divisor
 from ._read import read_csv as _read_csv
 from ._read import read_npz as _read_npz
 from ._read import read_parquet as _read_parquet
 from .atomic import atomic_path
+from .logs import LOG_SUFFIXES, is_log, read_log_for_load  # libraries: only in the readers
 from .recording import Metadata, Recording
 
 FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".npz": "npz"}
@@ -51,8 +58,12 @@ def load(
     time_unit: str = "s",
     temperature_scale: float = 1.0,
     temperature_offset: float = 0.0,
+    topic: str | None = None,
+    instance: int | None = None,
+    axis: str | None = None,
 ) -> Recording:
-    """Read a Recording from ``path`` (format from the extension).
+    """Read a Recording from ``path`` (format from the extension; a gyro log by its suffix
+    ``.ulg``, ``.bag``, ``.db3``, ``.mcap``, ``.bin``, or a ROS 2 bag folder).
 
     Args:
         time, output: column names of the time and gyro output columns.
@@ -66,6 +77,9 @@ def load(
         time_unit: unit of the time column: ``s``, ``ms``, ``us`` or ``ns`` (scaled to s).
         temperature_scale, temperature_offset: temperatures in deg C are
             ``temperature_scale * value + temperature_offset`` (raw sensor words, kelvin).
+        topic, instance: gyro logs only: which gyro (:func:`fogbayes.data.logs.read_log`).
+        axis: gyro logs only: ``x`` (default), ``y`` or ``z``, the body axis read as the
+            output (``output="gyro_y"`` says the same).
 
     The file is checked, not trusted (:mod:`fogbayes.data._read`): duplicate column
     names, ragged CSV rows, invalid metadata, damaged NPZ/Parquet files, a sample rate
@@ -83,14 +97,26 @@ def load(
     t_offset = finite(temperature_offset, "temperature_offset")
     if scale_factor is not None:
         scale_factor = finite(scale_factor, "scale_factor", positive=True)
-    kind = FORMATS.get(path.suffix.lower())
-    if kind is None:
-        raise FileFormatError(f"unknown file type '{path.suffix}'", file=src,
-                              fix="use .csv, .parquet or .npz")
-    if not path.is_file():
-        raise FileFormatError("file not found", file=src, fix="check the path")
-    reader = {"csv": _read_csv, "parquet": _read_parquet, "npz": _read_npz}[kind]
-    table = reader(path)
+    if is_log(path):
+        table = read_log_for_load(path, time=time, output=output, unit=unit,
+                                  time_unit=time_unit, topic=topic, instance=instance, axis=axis)
+        time, output = "time", "output"
+    else:
+        for flag, value in (("--axis", axis), ("--topic", topic), ("--instance", instance)):
+            if value is not None:
+                raise ArgumentError(f"{flag} applies to gyro logs only, not to "
+                                    f"'{path.suffix}' files", file=src, column=flag,
+                                    fix=f"drop {flag}; name the column with --column "
+                                        "(output= in fogbayes.load)")
+        kind = FORMATS.get(path.suffix.lower())
+        if kind is None:
+            raise FileFormatError(f"unknown file type '{path.suffix}'", file=src,
+                                  fix=f"use .csv, .parquet or .npz, or a gyro log "
+                                      f"({', '.join(LOG_SUFFIXES)} or a ROS 2 bag folder)")
+        if not path.is_file():
+            raise FileFormatError("file not found", file=src, fix="check the path")
+        reader = {"csv": _read_csv, "parquet": _read_parquet, "npz": _read_npz}[kind]
+        table = reader(path)
     try:
         return _recording(path, table, time=time, output=output, temperature=temperature,
                           input_rate=input_rate, unit=unit, scale_factor=scale_factor,

@@ -156,6 +156,13 @@ def fit_recording(rec, *, model: str = "allan", orders: str | None = None, bayes
             fix=f"use --taus dense (e.g. 20 per decade); 'all' is for up to {_ALL_TAUS_MAX} samples")
     dev = allan_deviation(y, fs, taus=options.get("taus", "octave"),
                           per_decade=int(options.get("per_decade", 20)), ci=CI)
+    if not np.any(dev.var > 0):  # a log of zero: nothing to fit, and no fit can say so
+        raise AllanInputError(
+            f"the output is constant ({np.nanmin(y):g} {rec.unit} at every sample): the Allan "
+            "variance is zero at every tau and there is no noise to fit",
+            file=rec.meta.source, column="output",
+            fix="check the column (a stuck, saturated or disconnected sensor?) or pass "
+                "the gyro's output column with --column")
     full = prepare(y, fs)
     data, gls, left_out = fit_range(full)
     sampler = {k: int(options[k]) for k in ("num_warmup", "num_samples", "num_chains")

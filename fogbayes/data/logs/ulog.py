@@ -1,0 +1,92 @@
+"""PX4 ULog (``.ulg``), read with pyulog.
+
+Format facts (docs.px4.io, "ULog File Format"; PX4 msg/*.msg):
+
+* ``sensor_gyro``: one topic per IMU, told apart by the ULog ``multi_id`` (the
+  ``instance``). Fields ``timestamp`` (publication) and, in PX4 >= 1.11,
+  ``timestamp_sample`` (when the sensor sampled), both in microseconds since boot; ``x``,
+  ``y``, ``z`` in rad/s (the driver's output, rotated into the body frame); ``temperature``
+  in deg C (NaN where the driver does not read it). Logged with ``SDLOG_PROFILE`` high rate
+  or sensor comparison, not by default.
+* ``sensor_combined``: logged by default; ``gyro_rad[0..2]`` in rad/s, ``timestamp`` in us,
+  no temperature. Used when there is no ``sensor_gyro``.
+
+The time is ``timestamp_sample`` where the topic has it (the sampling instant, free of the
+scheduling delay in ``timestamp``), else ``timestamp``, divided by 1e6 (float64 holds
+microseconds exactly for 285 years). Logging dropouts (the logger's buffer overflowed) and
+corruption pyulog detected are counted in the metadata: the samples they cost are gaps in
+the time stamps, never filled.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ._common import (LogSelectionError, NoGyroError, all_nan_temperature, gyro_table,
+                      library_output, notes_meta, require, sensor_id, unreadable)
+
+#: Gyro topics and their (x, y, z) fields, in the order tried when none is named.
+TOPICS = {"sensor_gyro": ("x", "y", "z"),
+          "sensor_combined": ("gyro_rad[0]", "gyro_rad[1]", "gyro_rad[2]")}
+
+
+def read_ulog(path: Path, *, topic: str | None, instance: int | None, axis: str):
+    """The Table of one gyro of a ULog file (see the module doc)."""
+    src = str(path)
+    if topic is not None and topic not in TOPICS:
+        raise LogSelectionError(f"'{topic}' is not a gyro topic of PX4 logs", file=src,
+                                column="--topic",
+                                fix=f"use --topic {' or '.join(TOPICS)} (or leave it out)")
+    pyulog = require("pyulog")
+    with library_output() as notes:
+        try:
+            # both gyro topics, even with one named: an error can then say what there is
+            ulog = pyulog.ULog(src, message_name_filter_list=list(TOPICS))
+        except MemoryError:
+            raise
+        except Exception as exc:  # ULogException, struct.error, ... on a damaged file
+            raise unreadable(src, "PX4 ULog file", exc) from None
+    found = {}
+    for d in ulog.data_list:
+        found.setdefault(d.name, {})[d.multi_id] = d
+    name = topic or next((t for t in TOPICS if t in found), None)
+    if name is None:
+        raise NoGyroError("the log holds no gyro messages (no sensor_gyro or sensor_combined)",
+                          file=src, fix="log the gyro: set SDLOG_PROFILE to include high rate "
+                                        "or sensor comparison, or keep the default profile "
+                                        "(sensor_combined)")
+    if name not in found:
+        have = sorted(t for t in TOPICS if t in found)
+        raise LogSelectionError(f"the log has no '{name}' messages; its gyro topics: {have}",
+                                file=src, column="--topic",
+                                fix=f"use --topic {have[0]}" if have else "log the gyro")
+    k = 0 if instance is None else int(instance)
+    if k not in found[name]:
+        raise LogSelectionError(f"'{name}' has no instance {k}; the log has instances "
+                                f"{sorted(found[name])}", file=src, column="--instance",
+                                fix=f"use --instance {min(found[name])}")
+    data = found[name][k].data
+    fields = TOPICS[name]
+    time_field = "timestamp_sample" if "timestamp_sample" in data else "timestamp"
+    meta = {"log_format": "PX4 ULog", "log_topic": name, "log_instance": k,
+            "time_source": f"{name}.{time_field} (us since boot)",
+            "sensor_id": sensor_id(path, f"{name}[{k}]")}
+    temp = None
+    if "temperature" in data:
+        temp = all_nan_temperature(np.asarray(data["temperature"], dtype=np.float64), meta,
+                                   f"{name}.temperature")
+        meta.setdefault("temperature_alignment", f"same message ({name}.temperature)")
+    else:
+        meta["temperature_alignment"] = f"none: {name} carries no temperature"
+    if ulog.dropouts:
+        meta["logging_dropouts"] = len(ulog.dropouts)
+        meta["logging_dropout_ms"] = int(sum(d.duration for d in ulog.dropouts))
+    if ulog.file_corruption:
+        meta["file_corruption_detected"] = True
+    meta.update(notes_meta(notes))
+    gyro = np.column_stack([np.asarray(data[f], dtype=np.float64) for f in fields])
+    return gyro_table(src, time=np.asarray(data[time_field], dtype=np.float64) / 1e6,
+                      gyro=gyro, temperature=temp, meta=meta, axis=axis,
+                      what=f"{name} instance {k}")
