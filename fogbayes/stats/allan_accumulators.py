@@ -46,6 +46,11 @@ from .allan_loops import empty_gaps, octave_feed, phase_step
 _NO_GAPS = empty_gaps()
 
 DEFAULT_CHUNK = 1 << 16  # samples per internal step: a few arrays of 512 KB stay in L2/L3
+#: The pyramid's step: each level reads two and writes one array of the step per step, so
+#: 64 KB arrays stay in L2 (measured 2026-11-25: 1 << 13 is 12 % faster than 1 << 16 on 2^20
+#: samples and 25 % on 1e7; the phase window keeps DEFAULT_CHUNK, since it moves its
+#: 2 max(m) history once per step).
+OCTAVE_CHUNK = 1 << 13
 
 
 def _offset(y: np.ndarray) -> float:
@@ -66,7 +71,7 @@ def _check_inf(y: np.ndarray, start: int) -> None:
 class OctaveAccumulator:
     """Overlapping AVAR sums at m = 1, 2, ..., 2^(levels-1), fed chunk by chunk."""
 
-    def __init__(self, levels: int, *, chunk: int = DEFAULT_CHUNK):
+    def __init__(self, levels: int, *, chunk: int = OCTAVE_CHUNK):
         if levels < 1:
             raise FogbayesError("need at least one octave level", fix="pass levels >= 1")
         self.ms = tuple(1 << k for k in range(levels))

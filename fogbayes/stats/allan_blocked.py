@@ -27,7 +27,8 @@ import numpy as np
 
 from ..errors import FogbayesError, TooShortError
 from .taus import cluster_sizes
-from .allan_accumulators import DEFAULT_CHUNK, OctaveAccumulator, PhaseAccumulator, variance
+from .allan_accumulators import (DEFAULT_CHUNK, OCTAVE_CHUNK, OctaveAccumulator,
+                                 PhaseAccumulator, variance)
 
 
 def is_octave(ms) -> bool:
@@ -36,17 +37,20 @@ def is_octave(ms) -> bool:
     return bool(ms.size and np.all(ms > 0) and np.all((ms & (ms - 1)) == 0))
 
 
-def accumulator(ms, *, chunk: int = DEFAULT_CHUNK):
-    """The accumulator for ``ms`` and a function mapping its result onto ``ms``."""
+def accumulator(ms, *, chunk: int | None = None):
+    """The accumulator for ``ms`` and a function mapping its result onto ``ms``.
+
+    ``chunk``: samples per step (default: :data:`OCTAVE_CHUNK` for the pyramid,
+    :data:`DEFAULT_CHUNK` for the phase window)."""
     ms = tuple(int(m) for m in np.unique(np.asarray(ms, dtype=np.int64)))
     if is_octave(ms):
-        acc = OctaveAccumulator(int(np.log2(ms[-1])) + 1, chunk=chunk)
+        acc = OctaveAccumulator(int(np.log2(ms[-1])) + 1, chunk=chunk or OCTAVE_CHUNK)
         idx = np.log2(np.asarray(ms)).astype(int)
         return acc, ms, lambda s, c: (s[idx], c[idx])
-    return PhaseAccumulator(ms, chunk=chunk), ms, lambda s, c: (s, c)
+    return PhaseAccumulator(ms, chunk=chunk or DEFAULT_CHUNK), ms, lambda s, c: (s, c)
 
 
-def allan_variance_fast(y, ms, *, chunk: int = DEFAULT_CHUNK) -> tuple[np.ndarray, np.ndarray]:
+def allan_variance_fast(y, ms, *, chunk: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Overlapping AVAR and terms kept at cluster sizes ``ms`` of rate samples ``y``.
 
     ``y``: (n,) or (batch, n); NaN marks missing samples (every term touching one is
@@ -72,7 +76,7 @@ def allan_variance_fast(y, ms, *, chunk: int = DEFAULT_CHUNK) -> tuple[np.ndarra
 
 
 def oadev_fast(y, fs: float, *, taus="octave", per_decade: int = 20, m_max: int | None = None,
-               chunk: int = DEFAULT_CHUNK):
+               chunk: int | None = None):
     """(tau s, overlapping ADEV, terms kept) on a named grid or explicit cluster sizes."""
     y = np.asarray(y, dtype=float)
     n = y.shape[-1]

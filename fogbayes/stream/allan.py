@@ -10,7 +10,7 @@ Memory bound: the accumulators keep the last ``2 max(m)`` samples' worth of bloc
 phase, so memory is ``O(max_lag + chunk)`` and independent of the file's length
 (``StreamAllan.memory_bytes`` reports it). Cluster sizes above ``max_lag`` (a memory budget)
 are not computed; they are listed in ``skipped``. With the default 2^22 (42 s at 100 kHz,
-11.6 h at 100 Hz) the octave pyramid holds about 16 (max_lag + levels x chunk) bytes = 80 MB,
+11.6 h at 100 Hz) the octave pyramid holds about 16 (max_lag + levels x chunk) bytes = 70 MB,
 the phase window of other grids about 2 x 8 x 4 max_lag = 270 MB (+130 MB with gaps). The
 in-memory :func:`~fogbayes.stats.allan.allan_deviation` has no such limit because it holds
 the whole phase (8 bytes per sample) and computes any m up to n/4 (Stable32's stop ratio);
@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import FogbayesError, TooShortError
 from ..stats.taus import cluster_sizes
 from ..units import convert_rate
-from ..stats.allan_accumulators import DEFAULT_CHUNK, variance
+from ..stats.allan_accumulators import variance
 from ..stats.allan_blocked import accumulator
 from .scan import scan_time
 from .sources import DEFAULT_ROWS, RecordSource, open_source
@@ -108,7 +108,7 @@ def _placed(source, fs, t0, rows, unit, tolerance, n_grid):
 def stream_allan(source, *, fs: float | None = None, taus="octave", per_decade: int = 20,
                  m_max: int | None = None, max_lag: int = DEFAULT_MAX_LAG,
                  unit: str | None = "deg/h", grid: str = "auto", tolerance: float = 0.05,
-                 rows: int = DEFAULT_ROWS, chunk: int = DEFAULT_CHUNK) -> StreamAllan:
+                 rows: int = DEFAULT_ROWS, chunk: int | None = None) -> StreamAllan:
     """Overlapping ADEV of ``source`` (a :class:`RecordSource` or a path) in bounded memory.
 
     Args:
@@ -119,7 +119,8 @@ def stream_allan(source, *, fs: float | None = None, taus="octave", per_decade: 
         unit: rate unit of the result (None = the file's unit, no conversion).
         grid: ``"time"`` (place samples by their time stamps), ``"index"`` (rows are
             consecutive samples) or ``"auto"`` (time if the file has a time column).
-        rows: rows read per chunk; chunk: samples per accumulator step.
+        rows: rows read per chunk; chunk: samples per accumulator step (default: the
+            accumulator's own, see :func:`fogbayes.stats.allan_blocked.accumulator`).
     """
     if not isinstance(source, RecordSource):
         source = open_source(source)
