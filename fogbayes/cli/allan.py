@@ -37,6 +37,28 @@ def summary_lines(doc: dict) -> list[str]:
     return out
 
 
+def channels(axis: str | None, column: str) -> list[tuple[str | None, dict]]:
+    """``[(name, load_recording keywords)]``: one per axis of ``--axis all`` / ``--axis x,z``
+    (gyro logs) or per column of ``--column a,b,c``; ``[(None, {...})]`` for one channel."""
+    from ..errors import FogbayesError
+
+    if axis is not None and (axis == "all" or "," in axis):
+        names = ["x", "y", "z"] if axis == "all" else [a.strip() for a in axis.split(",")]
+        bad = [a for a in names if a not in ("x", "y", "z")] or \
+            [a for a in set(names) if names.count(a) > 1]
+        if bad:
+            raise FogbayesError(f"--axis {axis!r}: {bad[0]!r} is not one of x, y, z once",
+                                column="--axis", fix="use --axis all, or e.g. --axis x,z")
+        return [(a, {"axis": a, "column": column}) for a in names]
+    if "," in column:
+        names = [c.strip() for c in column.split(",")]
+        if "" in names or len(set(names)) < len(names):
+            raise FogbayesError(f"--column {column!r}: empty or repeated column names",
+                                column="--column", fix="name each column once, e.g. gx,gy,gz")
+        return [(c, {"axis": axis, "column": c}) for c in names]
+    return [(None, {"axis": axis, "column": column})]
+
+
 @app.command()
 def allan(
     rec: Path = REC_ARG,
@@ -68,6 +90,10 @@ def allan(
       fogbayes allan gyro.csv --output-unit deg/s --taus dense --bayes \\
           --json av.json
       fogbayes -q allan static.csv --json - > adev.json
+      fogbayes allan flight.ulg --axis all --json adev.json --plot adev.png
+
+    With several axes (--axis all or x,z for a gyro log, --column gx,gy,gz for a table) the
+    document holds one Allan document per axis under "axes" (docs/logs.md).
     """
     from ..errors import FogbayesError, about_file
     from ..data.atomic import atomic_path
@@ -84,18 +110,28 @@ def allan(
         from ..plot.style import figure_format
 
         figure_format(plot)  # an unknown extension fails now, not after the fit
-    recording = load_recording(rec, column=column, time_column=time_column,
-                               output_unit=output_unit, scale_factor=scale_factor,
-                               time_unit=time_unit, temperature_scale=temperature_scale,
-                               temperature_offset=temperature_offset,
-                               topic=topic, instance=instance, axis=axis)
-    with progress("Allan deviation and noise fit" + (" (posterior)" if bayes else "")), \
-            about_file(rec):
-        doc = fit_recording(recording, model="allan", bayes=bayes, seed=seed, taus=taus,
-                            per_decade=per_decade)
+    docs = {}
+    for name, pick in channels(axis, column):
+        recording = load_recording(rec, time_column=time_column,
+                                   output_unit=output_unit, scale_factor=scale_factor,
+                                   time_unit=time_unit, temperature_scale=temperature_scale,
+                                   temperature_offset=temperature_offset,
+                                   topic=topic, instance=instance, **pick)
+        what = "Allan deviation and noise fit" + (" (posterior)" if bayes else "") + \
+            ("" if name is None else f", axis {name}")
+        with progress(what), about_file(rec):
+            docs[name] = fit_recording(recording, model="allan", bayes=bayes, seed=seed,
+                                       taus=taus, per_decade=per_decade)
+    if None in docs:
+        doc = docs[None]
+    else:  # one document, one fit document per axis (fogbayes/data/axes_doc.py)
+        from ..data.axes_doc import axes_document
+
+        doc = axes_document(docs, source=str(rec))
     write_json(doc, json_out)
-    for line in summary_lines(doc):
-        say(line)
+    for name, one in docs.items():
+        for line in summary_lines(one):
+            say(line if name is None else f"[{name}] {line}")
     if plot is not None:
         from ..plot.allan import allan_figure
 

@@ -159,8 +159,15 @@ def compensate(
     refuse_overwrite({"the recording": rec, "the --params document": params},
                      {"--out": out, "--json": json_out})
     fit_doc = read_fit(params)
+    from ..data.axes_doc import is_axes_document
     from ..data.documents import agreed_unit, check_channels
     from ..data.doc_rules import is_loop_document
+
+    if is_axes_document(fit_doc):
+        raise FogbayesError(f"a multi-axis {fit_doc['model']!r} document: compensation takes "
+                            "the document of one axis", file=str(params), column="--params",
+                            fix="fit the axis to compensate on its own (--axis x) and pass "
+                                "that document")
 
     if is_loop_document(fit_doc):
         if fit_doc["model"] == "allan" or stream:

@@ -56,7 +56,9 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
 
 @app.command()
 def export(
-    docs: list[Path] = typer.Argument(..., help="Allan documents (kalibr, ieee952) or bias-t "
+    docs: list[Path] = typer.Argument(..., help="Allan documents, one per axis or one of "
+                                                "'fogbayes allan --axis all' (kalibr, ieee952), "
+                                                "or bias-t "
                                                 "fit / loop documents (px4, ardupilot), one "
                                                 "per axis in x, y, z order.",
                                       show_default=False),
@@ -93,12 +95,21 @@ def export(
     if fmt in ("kalibr", "ieee952"):
         from ..export_noise import ieee952_document, kalibr_yaml
 
-        loaded = [(read_calibration(p), str(p)) for p in docs]
+        from ..data.axes_doc import per_axis
+
+        # a multi-axis document (fogbayes allan --axis all) counts as one document per axis
+        loaded = [(sub, where) for p in docs
+                  for _, sub, where in per_axis(read_calibration(p), str(p))]
         if fmt == "ieee952":
-            if len(loaded) != 1:
-                raise FogbayesError(f"ieee952 takes one Allan document, got {len(loaded)}",
-                                    column="DOCS", fix="export each axis to its own file")
-            text = json.dumps(ieee952_document(loaded[0][0], source=loaded[0][1]), indent=2) + "\n"
+            if len(docs) != 1:
+                raise FogbayesError(f"ieee952 takes one Allan document, got {len(docs)}",
+                                    column="DOCS", fix="export each file on its own")
+            names = [name for name, _, _ in per_axis(read_calibration(docs[0]))]
+            out_doc = ieee952_document(*loaded[0][:1], source=loaded[0][1]) \
+                if names == [None] else {"schema": "fogbayes.ieee952/1", "axes": {
+                    name: ieee952_document(sub, source=where)
+                    for name, (sub, where) in zip(names, loaded)}}
+            text = json.dumps(out_doc, indent=2) + "\n"
         else:
             text = kalibr_yaml(loaded, quantile=quantile, topic=topic)
     else:

@@ -69,9 +69,13 @@ def report(
                       "the --loop document": loop_json}, {"--out": out, "--pdf": pdf})
     from ..data.documents import agreed_unit, read_calibration
 
-    fit_doc = read_calibration(fit) if fit else None  # fit or loop document, validated
+    from ..data.axes_doc import per_axis
+
+    fit_doc = read_calibration(fit) if fit else None  # fit, loop or axes document, validated
+    # a multi-axis document: its axes share the recording, and so its unit
+    unit_doc = per_axis(fit_doc)[0][1] if fit_doc else None
     rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=agreed_unit(fit_doc, str(fit), rec_path, output_unit)
+                         output_unit=agreed_unit(unit_doc, str(fit), rec_path, output_unit)
                          if fit_doc else output_unit, scale_factor=scale_factor,
                          temperature=temperature, input_rate=input_rate,
                          time_unit=time_unit, temperature_scale=temperature_scale,

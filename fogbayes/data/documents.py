@@ -99,16 +99,21 @@ def read_fit_document(path: str | Path) -> dict:
 
 
 def read_calibration(path: str | Path) -> dict:
-    """A fit document or a loop document (``fogbayes loop --json``), validated as what it is.
+    """A fit document, a loop document (``fogbayes loop --json``) or a multi-axis document
+    (:mod:`fogbayes.data.axes_doc`), validated as what it is.
 
     Loop documents are checked by :func:`fogbayes.loop.calibration_doc.validate_loop_document`
     (their ``calibration`` must be applicable); anything else as a fit document.
     """
+    from .axes_doc import is_axes_document, validate_axes_document
+
     doc = _load(path)
     if is_loop_document(doc):  # the validator (and the loop package) only when needed
         from ..loop.calibration_doc import validate_loop_document
 
         return validate_loop_document(doc, str(path))
+    if is_axes_document(doc):  # one fit document per axis (fogbayes allan --axis all)
+        return validate_axes_document(doc, str(path))
     validate_fit_document(doc, str(path))
     return doc
 

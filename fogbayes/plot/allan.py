@@ -17,8 +17,23 @@ _TERM_NAMES = {"Q": "quantization", "N": "angle random walk", "B": "bias instabi
 
 
 def allan_figure(doc: dict, *, title: str | None = None):
-    """The figure (a matplotlib Figure) for an ``allan`` document."""
-    fig, ax = new_figure(figsize=(10.0, 4.6))
+    """The figure (a matplotlib Figure) for an ``allan`` document, or one panel per axis for
+    a multi-axis document (:mod:`fogbayes.data.axes_doc`)."""
+    from ..data.axes_doc import is_axes_document
+
+    if not is_axes_document(doc):
+        fig, ax = new_figure(figsize=(10.0, 4.6))
+        _draw(ax, doc, title or f"Allan deviation, {doc.get('sensor_id', '')}".rstrip(", "))
+        return fig
+    axes = doc["axes"]
+    fig, panels = new_figure(nrows=len(axes), figsize=(10.0, 4.0 * len(axes)), squeeze=False)
+    for ax, (name, sub) in zip(panels[:, 0], axes.items()):
+        _draw(ax, sub, f"{title or 'Allan deviation'}, axis {name}: {sub.get('sensor_id', '')}")
+    return fig
+
+
+def _draw(ax, doc: dict, title: str) -> None:
+    """One Allan document on ``ax``: measured ADEV with its bars, fit, terms, bands."""
     tau, dev = np.asarray(doc["tau"], float), np.asarray(doc["adev"], float)
     lo, hi = np.asarray(doc["adev_low"], float), np.asarray(doc["adev_high"], float)
     ax.errorbar(tau, dev, yerr=[dev - lo, hi - dev], fmt="o", ms=3, color=COLORS["data"],
@@ -50,9 +65,8 @@ def allan_figure(doc: dict, *, title: str | None = None):
     ax.set_ylim(0.5 * np.nanmin(lo), 2.0 * np.nanmax(hi))
     ax.set_xlabel("averaging time tau (s)")
     ax.set_ylabel(f"Allan deviation ({doc.get('unit', 'deg/h')})")
-    ax.set_title(escape_mathtext(title or f"Allan deviation, {doc.get('sensor_id', '')}".rstrip(", ")))
+    ax.set_title(escape_mathtext(title))
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
-    return fig
 
 
 def _label(term: str, est: dict | None) -> str:

@@ -56,6 +56,10 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
 
     if fit is not None and is_loop_document(fit):
         return _loop_calibration_report(rec, out, fit, seed=seed, title=title, allan=allan)
+    from ..data.axes_doc import is_axes_document
+
+    if fit is not None and is_axes_document(fit):
+        return _axes_report(rec, out, fit, title=title)
     if fit is None and model is not None:
         fit = workflow_for(model).fit_recording(rec, model=model, bayes=bayes, seed=seed)
     parts, outliers, gross, residual_rec = [], None, None, rec
@@ -106,6 +110,23 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
                      "drift does not hide the noise.")
         parts.append(sec)
     title = title or f"Calibration report: {rec.meta.sensor_id}"
+    return write(out, title, parts, subtitle=f"source: {rec.meta.source or 'in memory'}")
+
+
+def _axes_report(rec, out, doc: dict, *, title) -> Path:
+    """A multi-axis noise document: the recording, then one noise section per axis."""
+    from ..report import sections as S
+    from ..report.html import write
+
+    if doc["model"] != "allan":
+        raise FogbayesError(f"a multi-axis {doc['model']!r} document has no report yet",
+                            column="--fit", fix="report each axis with its own document")
+    parts = [S.recording_section(rec)]
+    for name, sub in doc["axes"].items():
+        sec = S.noise_section(sub)
+        sec.title = f"Noise: Allan deviation, axis {name}"
+        parts.append(sec)
+    title = title or f"Noise report: {rec.meta.sensor_id}, axes {', '.join(doc['axes'])}"
     return write(out, title, parts, subtitle=f"source: {rec.meta.source or 'in memory'}")
 
 

@@ -1,0 +1,86 @@
+"""Several axes in one run: `fogbayes allan LOG --axis all` (and `--column a,b,c`) writes
+one document with one Allan document per axis, each equal to the single-axis run's; export,
+report and plot take it; compensate refuses it by name."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import yaml
+
+import _log_writers as W
+from fogbayes.cli import main
+from fogbayes.data import Recording, save
+from fogbayes.data.axes_doc import AXES_SCHEMA
+
+pytest.importorskip("pyulog")
+
+
+@pytest.fixture(scope="module")
+def ulog(tmp_path_factory):
+    path = tmp_path_factory.mktemp("axes") / "flight.ulg"
+    W.write_ulog(path, {("sensor_gyro", 0): W.series(n=6000, fs=100.0)})
+    return path
+
+
+def _doc(path):
+    return json.loads(path.read_text())
+
+
+def test_axis_all_equals_three_single_axis_runs(ulog, tmp_path):
+    out = tmp_path / "axes.json"
+    assert main(["-q", "allan", str(ulog), "--axis", "all", "--json", str(out),
+                 "--plot", str(tmp_path / "axes.png")]) == 0
+    doc = _doc(out)
+    assert doc["schema"] == AXES_SCHEMA and list(doc["axes"]) == ["x", "y", "z"]
+    assert (tmp_path / "axes.png").stat().st_size > 0
+    for a in ("y", "z"):
+        one = tmp_path / f"{a}.json"
+        assert main(["-q", "allan", str(ulog), "--axis", a, "--json", str(one)]) == 0
+        single = _doc(one)
+        assert doc["axes"][a]["adev"] == single["adev"]
+        assert doc["axes"][a]["fit"]["terms"] == single["fit"]["terms"]
+    # the three axes differ (the writer gives each its own noise size)
+    n = [doc["axes"][a]["fit"]["terms"]["N"]["value"] for a in "xyz"]
+    assert len(set(np.round(n, 12))) == 3
+
+
+def test_axes_document_feeds_export_and_report_and_is_refused_by_compensate(ulog, tmp_path,
+                                                                           capsys):
+    out = tmp_path / "axes.json"
+    assert main(["-q", "allan", str(ulog), "--axis", "x,y", "--json", str(out)]) == 0
+    doc = _doc(out)
+    assert list(doc["axes"]) == ["x", "y"]
+    assert main(["-q", "export", str(out), "-f", "kalibr", "--out", str(tmp_path / "i.yaml")]) == 0
+    y = yaml.safe_load((tmp_path / "i.yaml").read_text())
+    n_si = [doc["axes"][a]["fit"]["terms"]["N"]["value"] * np.pi / 180 / 60 for a in "xy"]
+    assert y["gyroscope_noise_density"] == pytest.approx(max(n_si), rel=1e-8)  # the largest
+    assert main(["-q", "report", str(ulog), "--fit", str(out), "--out",
+                 str(tmp_path / "r.html")]) == 0
+    html = (tmp_path / "r.html").read_text()
+    assert "axis x" in html and "axis y" in html
+    capsys.readouterr()
+    assert main(["-q", "compensate", str(ulog), "--params", str(out), "--out",
+                 str(tmp_path / "c.csv")]) == 2
+    assert "multi-axis" in capsys.readouterr().err
+
+
+def test_columns_of_a_table_and_bad_axis_lists(tmp_path, capsys):
+    rng = np.random.default_rng(2)
+    rec = Recording(time=np.arange(4000) / 10.0, output=rng.normal(size=4000), unit="deg/h")
+    path = tmp_path / "two.csv"
+    save(rec, path)
+    text = path.read_text().replace("time,output", "time,output,second")
+    rows = text.splitlines()
+    body = [r if r.startswith("#") or r.startswith("time") else f"{r},{rng.normal() * 3}"
+            for r in rows]
+    path.write_text("\n".join(body) + "\n")
+    out = tmp_path / "cols.json"
+    assert main(["-q", "allan", str(path), "--column", "output,second", "--json", str(out)]) == 0
+    doc = _doc(out)
+    n1, n2 = (doc["axes"][c]["fit"]["terms"]["N"]["value"] for c in ("output", "second"))
+    assert n2 == pytest.approx(3 * n1, rel=0.1)  # white noise 3x larger
+    assert main(["-q", "allan", str(path), "--column", "output,output", "--json", str(out)]) == 2
+    assert main(["-q", "allan", str(path), "--axis", "x,w", "--json", str(out)]) == 2
