@@ -219,7 +219,9 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     dispersion = max(1.0, chi2 / dof) if gof_p < GOF_LEVEL else 1.0
     half = Z90 * se * np.sqrt(dispersion)  # quasi-likelihood: a misfit widens every interval
     low = np.where(d_chi2 < CHI2_90 * dispersion, 0.0, np.exp(logp - half))
-    high = np.exp(np.minimum(logp + half, np.log(upper_caps(data, keep))))
+    # the cap stops absurd upper bounds, never below the estimate itself (a misfit record,
+    # e.g. a sine, can put the estimate above the cap: the interval must still hold it)
+    high = np.exp(np.minimum(logp + half, np.maximum(np.log(upper_caps(data, keep)), logp)))
     return AllanFit("wls", _estimates(value, low, high, mask), AllanParams(*value), converged,
                     {"logp": logp, "se_log": se * np.sqrt(dispersion), "chi2": chi2, "dof": dof,
                      "gof_p": gof_p, "dispersion": dispersion, "keep": keep,
