@@ -88,3 +88,25 @@ def test_columns_of_a_table_and_bad_axis_lists(tmp_path, capsys):
     assert n2 == pytest.approx(3 * n1, rel=0.1)  # white noise 3x larger
     assert main(["-q", "allan", str(path), "--column", "output,output", "--json", str(out)]) == 2
     assert main(["-q", "allan", str(path), "--axis", "x,w", "--json", str(out)]) == 2
+
+
+def test_fit_axis_all_gives_firmware_parameters_for_three_axes(tmp_path):
+    """One ULog, one command per step: bias-t per axis, then PX4 and ArduPilot files with
+    x, y, z -- each axis's coefficients equal to its single-axis fit."""
+    path = tmp_path / "ramp.ulg"
+    W.write_ulog(path, {("sensor_gyro", 0): W.series(n=20000, fs=100.0)})
+    out = tmp_path / "fit.json"
+    assert main(["-q", "fit", str(path), "-m", "bias-t", "--axis", "all", "--json", str(out)]) == 0
+    doc = _doc(out)
+    assert doc["schema"] == AXES_SCHEMA and doc["model"] == "bias-t"
+    one = tmp_path / "z.json"
+    assert main(["-q", "fit", str(path), "-m", "bias-t", "--axis", "z", "--json", str(one)]) == 0
+    assert doc["axes"]["z"]["params"]["coef"] == _doc(one)["params"]["coef"]
+    px4 = tmp_path / "tc.params"
+    assert main(["-q", "export", str(out), "-f", "px4", "--out", str(px4)]) == 0
+    text = px4.read_text()
+    assert all(f"TC_G0_X{k}_{a}\t" in text for k in range(4) for a in range(3))
+    ap = tmp_path / "tcal.param"
+    assert main(["-q", "export", str(out), "-f", "ardupilot", "--out", str(ap)]) == 0
+    text = ap.read_text()
+    assert all(f"INS_TCAL1_GYR{k}_{a}," in text for k in (1, 2, 3) for a in "XYZ")

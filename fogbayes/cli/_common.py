@@ -113,6 +113,28 @@ def load_recording(path: Path, *, column: str = "output", time_column: str = "ti
                             fix=(exc.fix or "").replace(exc.column, flag)) from None
 
 
+def channels(axis: str | None, column: str) -> list[tuple[str | None, dict]]:
+    """``[(name, load_recording keywords)]``: one per axis of ``--axis all`` / ``--axis x,z``
+    (gyro logs) or per column of ``--column a,b,c``; ``[(None, {...})]`` for one channel."""
+    from ..errors import FogbayesError
+
+    if axis is not None and (axis == "all" or "," in axis):
+        names = ["x", "y", "z"] if axis == "all" else [a.strip() for a in axis.split(",")]
+        bad = [a for a in names if a not in ("x", "y", "z")] or \
+            [a for a in set(names) if names.count(a) > 1]
+        if bad:
+            raise FogbayesError(f"--axis {axis!r}: {bad[0]!r} is not one of x, y, z once",
+                                column="--axis", fix="use --axis all, or e.g. --axis x,z")
+        return [(a, {"axis": a, "column": column}) for a in names]
+    if "," in column:
+        names = [c.strip() for c in column.split(",")]
+        if "" in names or len(set(names)) < len(names):
+            raise FogbayesError(f"--column {column!r}: empty or repeated column names",
+                                column="--column", fix="name each column once, e.g. gx,gy,gz")
+        return [(c, {"axis": axis, "column": c}) for c in names]
+    return [(None, {"axis": axis, "column": column})]
+
+
 def write_json(obj: Any, out: Path | str) -> None:
     """Write ``obj`` as JSON to ``out``, atomically (:mod:`fogbayes.data.atomic`); ``-``
     means stdout."""

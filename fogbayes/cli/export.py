@@ -28,9 +28,12 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
     from ..errors import FogbayesError
     from ..export import ExportError, basis_from_dict, basis_from_loop
 
+    from ..data.axes_doc import per_axis
+
     axes, spans = [], []
-    for p in paths:
-        doc = read_calibration(p)
+    # a multi-axis document (fogbayes fit --axis all) counts as one document per axis
+    for doc, p in ((sub, where) for p in paths
+                   for _, sub, where in per_axis(read_calibration(p), str(p))):
         if doc.get("schema", "").startswith("fogbayes.loop"):
             axes.append(basis_from_loop(doc, source=str(p)))
             rng = doc["calibration"].get("valid", {}).get("temperature")
@@ -115,10 +118,10 @@ def export(
     else:
         from .. import export as ex
 
-        if len(docs) > 3:
-            raise FogbayesError(f"{fmt} takes 1 to 3 axes, got {len(docs)}", column="DOCS",
-                                fix="pass the x, y, z documents in that order")
         axes, span = _axes(docs)
+        if len(axes) > 3:
+            raise FogbayesError(f"{fmt} takes 1 to 3 axes, got {len(axes)}", column="DOCS",
+                                fix="pass the x, y, z documents in that order")
         if fmt == "px4":
             params = ex.px4_gyro_parameters(axes, gyro_index=0 if index is None else index,
                                             device_id=device_id, t_range=span)

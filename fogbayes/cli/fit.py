@@ -17,7 +17,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
                       progress, refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, channels
 
 
 #: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
@@ -170,6 +170,10 @@ def fit(
       fogbayes fit run.csv -m thermal --orders 2,2 --bayes --json fit.json
       fogbayes fit chamber.csv -m thermal --processing paper --json fit.json
       fogbayes -q fit table.csv -m composite --json - > fit.json
+      fogbayes fit flight.ulg -m bias-t --axis all --json fit.json   # then: export -f px4
+
+    With several axes (--axis all or x,z for a gyro log, --column gx,gy,gz for a table) the
+    document holds one fit document per axis under "axes" (docs/logs.md).
     """
     from ..errors import about_file
     from ..workflow import workflow_for
@@ -180,20 +184,31 @@ def fit(
     for key, value in (("processing", processing), ("noise", noise)):
         if value is not None:
             options[key] = value
-    recording = load_recording(rec, column=column, time_column=time_column,
-                               output_unit=output_unit, scale_factor=scale_factor,
-                               temperature=temperature, input_rate=input_rate,
-                               time_unit=time_unit, temperature_scale=temperature_scale,
-                               temperature_offset=temperature_offset,
-                               topic=topic, instance=instance, axis=axis)
-    with progress(f"fitting {model} to {recording.n} samples" + (" (posterior)" if bayes else "")), \
-            about_file(rec):
-        doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,
-                               **options)
+    docs = {}
+    for name, pick in channels(axis, column):
+        recording = load_recording(rec, time_column=time_column,
+                                   output_unit=output_unit, scale_factor=scale_factor,
+                                   temperature=temperature, input_rate=input_rate,
+                                   time_unit=time_unit, temperature_scale=temperature_scale,
+                                   temperature_offset=temperature_offset,
+                                   topic=topic, instance=instance, **pick)
+        what = f"fitting {model} to {recording.n} samples" + \
+            (" (posterior)" if bayes else "") + ("" if name is None else f", axis {name}")
+        with progress(what), about_file(rec):
+            docs[name] = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes,
+                                          seed=seed, **options)
+    if None in docs:
+        doc = docs[None]
+    else:  # one document, one fit document per axis (fogbayes/data/axes_doc.py)
+        from ..data.axes_doc import axes_document
+
+        doc = axes_document(docs, source=str(rec))
     write_json(doc, json_out)
-    say(summary_line(doc))
-    for warning in doc.get("warnings") or []:  # e.g. not identifiable, gross errors flagged
-        say(f"warning: {warning}")
-    if strict and not doc.get("converged", False):
+    for name, one in docs.items():
+        tag = "" if name is None else f"[{name}] "
+        say(tag + summary_line(one))
+        for warning in one.get("warnings") or []:  # e.g. not identifiable, gross errors
+            say(f"{tag}warning: {warning}")
+    if strict and not all(one.get("converged", False) for one in docs.values()):
         say("the fit did not converge (--strict)")
         raise typer.Exit(1)
