@@ -161,7 +161,10 @@ def ardupilot_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, i
 def ardupilot_param_file(params: dict) -> str:
     """Mission Planner / MAVProxy ``.param`` text: ``NAME,VALUE`` lines."""
     lines = ["# ArduPilot gyro temperature calibration written by fogbayes export",
-             "# the accelerometer INS_TCAL*_ACC* parameters are not included"]
+             "# the accelerometer INS_TCAL*_ACC* parameters are not included",
+             "# valid only if the log was recorded with INS_TCAL<i>_ENABLE = 0 (else its rates",
+             "# were already corrected) and its axes are the sensor's (AHRS_ORIENTATION = 0;",
+             "# the logged IMU rates are rotated by the board orientation, the correction is not)"]
     lines += [f"{k},{v}" if isinstance(v, int) else f"{k},{v:.9g}" for k, v in params.items()]
     return "\n".join(lines) + "\n"
 

@@ -113,12 +113,20 @@ def kalibr_yaml(docs: list[tuple[dict, str | None]], *, quantile: float = 0.5,
             if terms.get(t) is None:
                 raise NoiseExportError(f"the document has no {t} term", file=src,
                                        column=f"fit.terms.{t}", fix="fit the five-term model")
+            if not terms[t][key] > 0:  # a filter told "no noise" trusts its model forever
+                raise NoiseExportError(
+                    f"{t} is {terms[t][key]:g} at quantile {quantile:g}: the data do not "
+                    f"resolve {t} (its interval reaches 0), and a filter given 0 would never "
+                    "doubt its model", file=src, column=f"fit.terms.{t}",
+                    fix="use --quantile 0.5 (the estimate) or the interval's upper end")
+        unresolved = [t for t in ("N", "K") if not terms[t].get("present", True)]
         rows.append((src, float(doc["fs"]), terms["N"][key] * TO_SI["N"][0],
-                     terms["K"][key] * TO_SI["K"][0]))
-    rates = {r[1] for r in rows}
-    if len(rates) > 1:
-        raise NoiseExportError(f"the axes were recorded at different rates {sorted(rates)} Hz",
-                               file=docs[1][1], column="fs", fix="export each sensor alone")
+                     terms["K"][key] * TO_SI["K"][0], unresolved))
+    for src, fs, *_ in rows[1:]:
+        if fs != rows[0][1]:
+            raise NoiseExportError(f"the axes were recorded at different rates ({rows[0][1]:g} "
+                                   f"Hz in {rows[0][0]}, {fs:g} Hz here)", file=src,
+                                   column="fs", fix="export each sensor alone")
     n_max, k_max = max(r[2] for r in rows), max(r[3] for r in rows)
     what = {"value": "the estimate (quantile 0.5)", "low": f"quantile {quantile:g}",
             "high": f"quantile {quantile:g}"}[key]
@@ -128,8 +136,10 @@ def kalibr_yaml(docs: list[tuple[dict, str | None]], *, quantile: float = 0.5,
              "#   gyroscope_random_walk   = K (rate random walk)   [rad/s^2/sqrt(Hz)]",
              f"# each is {what} of the fogbayes Allan fit"
              + (" ; the largest of the axes:" if len(rows) > 1 else ":")]
-    for src, _, n, k in rows:
-        lines.append(f"#   {src}: N = {n:.6e}, K = {k:.6e}")
+    for src, _, n, k, unresolved in rows:
+        flag = f" ({', '.join(unresolved)} not resolved by the data: its interval reaches 0)" \
+            if unresolved else ""
+        lines.append(f"#   {src}: N = {n:.6e}, K = {k:.6e}{flag}")
     lines.append("# the accelerometer keys are not written: fogbayes fitted the gyroscope only")
     lines += [f"rostopic: {topic}", f"update_rate: {rows[0][1]:.9g}",
               f"gyroscope_noise_density: {n_max:.9e}", f"gyroscope_random_walk: {k_max:.9e}"]

@@ -127,10 +127,16 @@ def test_posterior_document(rate_deg_h, doc_deg_h):
 
 def test_constant_output_is_bad_input_not_a_crash(tmp_path):
     """A stuck sensor: every Allan variance is zero; one line naming the file, exit 2."""
-    from fogbayes.cli import main
+    import subprocess
+    import sys
+
     from fogbayes.data import Recording, save
 
     path = tmp_path / "stuck.csv"
     save(Recording(time=np.arange(3000) / 10.0, output=np.full(3000, 3.0), unit="deg/h"), path)
-    assert main(["-q", "allan", str(path), "--json", str(tmp_path / "a.json")]) == 2
+    r = subprocess.run([sys.executable, "-m", "fogbayes", "-q", "allan", str(path), "--json",
+                        str(tmp_path / "a.json")], capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    err = r.stderr.strip()
+    assert err.count("\n") == 0 and "stuck.csv" in err and "output is constant" in err
     assert not (tmp_path / "a.json").exists()

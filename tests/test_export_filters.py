@@ -142,3 +142,19 @@ def test_ardupilot_and_px4_files_from_a_bias_t_fit(tmp_path, capsys):
     assert f"INS_TCAL2_TMIN,{lo:.9g}" in text and f"INS_TCAL2_TMAX,{hi:.9g}" in text
     code, px4, _ = _export([str(fit), str(fit), "-f", "px4"], capsys)
     assert code == 0 and "TC_G0_X3_1" in px4 and "TC_G0_X0_2" not in px4
+
+
+def test_kalibr_refuses_to_write_zero_noise(adev_doc, capsys, tmp_path):
+    """A term the data do not resolve has an interval reaching 0: its lower end would tell
+    the filter there is no such noise. Refused, naming the term."""
+    path, _ = adev_doc
+    doc = json.loads(path.read_text())
+    doc["fit"]["terms"]["K"].update(low=0.0, present=False)
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(doc))
+    code, _, err = _export([str(edited), "--format", "kalibr", "--quantile", "0.05"], capsys)
+    assert code == 2 and "K is 0 at quantile 0.05" in err
+    code, out, _ = _export([str(edited), "--format", "kalibr"], capsys)
+    assert code == 0 and "K not resolved by the data" in out
+    code, _, err = _export([str(edited), "--format", "ieee952", "--quantile", "0.95"], capsys)
+    assert code == 2 and "--quantile applies to --format kalibr" in err

@@ -110,3 +110,27 @@ def test_fit_axis_all_gives_firmware_parameters_for_three_axes(tmp_path):
     assert main(["-q", "export", str(out), "-f", "ardupilot", "--out", str(ap)]) == 0
     text = ap.read_text()
     assert all(f"INS_TCAL1_GYR{k}_{a}," in text for k in (1, 2, 3) for a in "XYZ")
+
+
+def test_firmware_export_places_axes_by_name_not_position(tmp_path, capsys):
+    """--axis y,x must not become x, y: the axes are placed by their names, and a set the
+    firmware cannot take in x, y, z order (z alone, x and z) is refused."""
+    path = tmp_path / "ramp.ulg"
+    W.write_ulog(path, {("sensor_gyro", 0): W.series(n=20000, fs=100.0)})
+    yx, xz = tmp_path / "yx.json", tmp_path / "xz.json"
+    assert main(["-q", "fit", str(path), "-m", "bias-t", "--axis", "Y,x", "--json", str(yx)]) == 0
+    assert list(_doc(yx)["axes"]) == ["y", "x"]
+    x_only, y_only = tmp_path / "x.json", tmp_path / "y.json"
+    for a, out in (("x", x_only), ("y", y_only)):
+        assert main(["-q", "fit", str(path), "-m", "bias-t", "--axis", a, "--json", str(out)]) == 0
+    by_name, by_order = tmp_path / "a.param", tmp_path / "b.param"
+    assert main(["-q", "export", str(yx), "-f", "ardupilot", "--out", str(by_name)]) == 0
+    assert main(["-q", "export", str(x_only), str(y_only), "-f", "ardupilot", "--out",
+                 str(by_order)]) == 0
+    assert by_name.read_text() == by_order.read_text()
+    assert main(["-q", "fit", str(path), "-m", "bias-t", "--axis", "x,z", "--json", str(xz)]) == 0
+    capsys.readouterr()
+    assert main(["-q", "export", str(xz), "-f", "px4", "--out", str(tmp_path / "c.params")]) == 2
+    assert "x, y, z" in capsys.readouterr().err
+    assert main(["-q", "export", str(yx), "-f", "px4", "--index", "7",
+                 "--out", str(tmp_path / "d.params")]) == 2

@@ -119,7 +119,8 @@ def channels(axis: str | None, column: str) -> list[tuple[str | None, dict]]:
     from ..errors import FogbayesError
 
     if axis is not None and (axis == "all" or "," in axis):
-        names = ["x", "y", "z"] if axis == "all" else [a.strip() for a in axis.split(",")]
+        names = ["x", "y", "z"] if axis == "all" else \
+            [a.strip().lower() for a in axis.split(",")]
         bad = [a for a in names if a not in ("x", "y", "z")] or \
             [a for a in set(names) if names.count(a) > 1]
         if bad:

@@ -22,38 +22,56 @@ from ._common import QUIET_OPT, refuse_overwrite, say
 _FORMATS = ("kalibr", "ieee952", "px4", "ardupilot")
 
 
-def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
-    """(basis, coef) per axis from bias-t fit or loop documents, and their temperature span."""
+def _ordered(paths: list[Path]) -> list[tuple[dict, str]]:
+    """The documents in x, y, z order: plain documents in the order given; the axes of a
+    multi-axis document by their names (x, y, z from the start, none missing or repeated)."""
+    from ..data.axes_doc import per_axis
     from ..data.documents import read_calibration
+    from ..export import ExportError
+
+    named = [(name, doc, where) for p in paths
+             for name, doc, where in per_axis(read_calibration(p), str(p))]
+    names = [n for n, _, _ in named]
+    if all(n is None for n in names):
+        return [(doc, where) for _, doc, where in named]
+    if any(n is None for n in names) or sorted(names) != list("xyz"[:len(names)]):
+        raise ExportError(f"the firmware takes the gyro axes as x, y, z; the documents hold "
+                          f"axes {[n or '(unnamed)' for n in names]}", file=str(paths[0]),
+                          column="axes", fix="fit the axes x, y, z (or x, or x and y) into one "
+                                             "document ('fogbayes fit LOG --axis all'), or pass "
+                                             "one plain document per axis in x, y, z order")
+    return [(doc, where) for n in "xyz"[:len(names)] for m, doc, where in named if m == n]
+
+
+def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
+    """(basis, coef) per axis from bias-t fit or loop documents, in x, y, z order, and the
+    temperature span the fits saw (None when no document states one)."""
     from ..errors import FogbayesError
     from ..export import ExportError, basis_from_dict, basis_from_loop
 
-    from ..data.axes_doc import per_axis
-
     axes, spans = [], []
-    # a multi-axis document (fogbayes fit --axis all) counts as one document per axis
-    for doc, p in ((sub, where) for p in paths
-                   for _, sub, where in per_axis(read_calibration(p), str(p))):
+    for doc, p in _ordered(paths):
         if doc.get("schema", "").startswith("fogbayes.loop"):
-            axes.append(basis_from_loop(doc, source=str(p)))
+            axes.append(basis_from_loop(doc, source=p))
             rng = doc["calibration"].get("valid", {}).get("temperature")
             spans.append(rng[0] if isinstance(rng, list) and rng and isinstance(rng[0], list)
                          else None)
             continue
         if doc.get("model") != "bias-t":
             raise ExportError(f"firmware thermal parameters come from a bias-t fit, this is a "
-                              f"{doc.get('model')!r} document", file=str(p), column="model",
+                              f"{doc.get('model')!r} document", file=p, column="model",
                               fix="run 'fogbayes fit REC --model bias-t --orders 3' (temperature only)")
         params = doc["params"]
         unit = (params.get("units") or {}).get("output", "deg/h")
         if unit != "deg/h":
             raise FogbayesError(f"the fit's output unit is {unit!r}, the export needs deg/h",
-                                file=str(p), column="params.units.output",
+                                file=p, column="params.units.output",
                                 fix="run 'fogbayes fit' with --output-unit set to the recording's rate unit")
-        axes.append((basis_from_dict(params["basis"], source=str(p)), params["coef"]))
+        axes.append((basis_from_dict(params["basis"], source=p), params["coef"]))
         spans.append((params.get("valid_range") or {}).get("T"))
-    if all(s is not None for s in spans):
-        return axes, (min(s[0] for s in spans), max(s[1] for s in spans))
+    spans = [sp for sp in spans if sp is not None]
+    if spans:  # the span of the data the fits saw (else: the bases' centre +- scale)
+        return axes, (min(sp[0] for sp in spans), max(sp[1] for sp in spans))
     return axes, None
 
 
@@ -94,6 +112,16 @@ def export(
     if fmt not in _FORMATS:
         raise FogbayesError(f"unknown export format '{fmt}'", column="--format",
                             fix=f"use one of {', '.join(_FORMATS)}")
+    if quantile != 0.5 and fmt != "kalibr":
+        raise FogbayesError(f"--quantile applies to --format kalibr, not {fmt}",
+                            column="--quantile", fix="drop --quantile (ieee952 writes the "
+                                                     "estimate and both interval ends)")
+    ranges = {"px4": (0, 3), "ardupilot": (1, 3)}  # TC_G0..3_*, INS_TCAL1..3_*
+    if index is not None and (fmt not in ranges or not ranges[fmt][0] <= index <= ranges[fmt][1]):
+        lo, hi = ranges.get(fmt, (None, None))
+        raise FogbayesError(f"--index {index} names no {fmt} parameter set", column="--index",
+                            fix=f"use {lo}..{hi}" if lo is not None else
+                                "drop --index (px4 and ardupilot only)")
     refuse_overwrite({"a document": docs}, {"--out": out})
     if fmt in ("kalibr", "ieee952"):
         from ..export_noise import ieee952_document, kalibr_yaml

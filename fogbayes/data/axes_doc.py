@@ -58,10 +58,7 @@ def validate_axes_document(doc: dict, source: str | None = None) -> dict:
                                file=source, column="axes",
                                fix="pass the document fogbayes wrote, unchanged")
     for name, sub in axes.items():
-        try:
-            validate_fit_document(sub, f"{source}[axes.{name}]")
-        except FitDocumentError as exc:
-            raise exc from None
+        validate_fit_document(sub, f"{source}[axes.{name}]")
         if sub.get("model") != doc.get("model"):
             raise FitDocumentError(f"axis {name!r} holds a {sub.get('model')!r} fit in a "
                                    f"{doc.get('model')!r} document", file=source,

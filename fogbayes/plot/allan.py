@@ -28,7 +28,8 @@ def allan_figure(doc: dict, *, title: str | None = None):
     axes = doc["axes"]
     fig, panels = new_figure(nrows=len(axes), figsize=(10.0, 4.0 * len(axes)), squeeze=False)
     for ax, (name, sub) in zip(panels[:, 0], axes.items()):
-        _draw(ax, sub, f"{title or 'Allan deviation'}, axis {name}: {sub.get('sensor_id', '')}")
+        sensor = sub.get("sensor_id") or ""
+        _draw(ax, sub, f"{title or 'Allan deviation'}, axis {name}" + (f": {sensor}" if sensor else ""))
     return fig
 
 

@@ -78,7 +78,7 @@ class OctaveAccumulator:
         self.chunk = int(chunk)
         c = self.chunk
         if any(m >= c and m % c for m in self.ms):
-            raise FogbayesError(f"chunk {c} must be a power of two", fix="pass chunk=65536")
+            raise FogbayesError(f"chunk {c} must be a power of two", fix="pass e.g. chunk=8192")
         # level k: [last m block sums | new chunk] when m < chunk; when m >= chunk a ring of
         # m + chunk values whose slots are aligned to the chunk, so old and new never wrap
         # or overlap. All levels live in one array for the compiled step.
