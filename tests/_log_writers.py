@@ -169,14 +169,19 @@ def _ulog_row(topic: str, s: Series, k: int) -> bytes:
     return struct.pack("<Qffff", us, 0.0, 0.0, 9.81, float(s.temperature[k]))
 
 
-def write_ulog(path: Path, instances: dict[tuple[str, int], Series]) -> Path:
-    """``instances`` maps (topic, multi_id) to the samples of that instance."""
+def write_ulog(path: Path, instances: dict[tuple[str, int], Series],
+               params: dict[str, int] | None = None) -> Path:
+    """``instances`` maps (topic, multi_id) to the samples of that instance; ``params``:
+    int32 parameters ('P' messages: key length, "int32_t NAME", value)."""
     out = b"ULog\x01\x12\x35" + struct.pack("<BQ", 1, 0)
     out += _ulog_msg(b"B", bytes(16) + struct.pack("<3Q", 0, 0, 0))
     for topic in sorted({tp for tp, _ in instances}):
         out += _ulog_msg(b"F", f"{topic}:{_ULOG_FORMATS[topic]}".encode())
     key = b"char[3] sys_name"
     out += _ulog_msg(b"I", bytes([len(key)]) + key + b"PX4")
+    for name, value in (params or {}).items():
+        pkey = f"int32_t {name}".encode()
+        out += _ulog_msg(b"P", bytes([len(pkey)]) + pkey + struct.pack("<i", int(value)))
     rows = []
     for msg_id, ((topic, multi), s) in enumerate(sorted(instances.items())):
         out += _ulog_msg(b"A", struct.pack("<BH", multi, msg_id) + topic.encode())
@@ -205,10 +210,14 @@ def _df_fmt(mtype: int, name: str, fmt: str, cols: str) -> bytes:
     return _df(0x80, _FMT[0], mtype, length, name.encode(), fmt.encode(), cols.encode())
 
 
-def write_dataflash(path: Path, instances: dict[int, Series], old_style: bool = False) -> Path:
+def write_dataflash(path: Path, instances: dict[int, Series], old_style: bool = False,
+                    params: dict[str, float] | None = None) -> Path:
     """New style: one ``IMU`` type with instance field ``I``; old style: ``IMU``, ``IMU2``,
-    ``IMU3`` types without it."""
+    ``IMU3`` types without it. ``params``: PARM messages (Name, Value) at the start."""
     out = _df_fmt(0x80, "FMT", *_FMT)
+    if params:
+        out += _df_fmt(64, "PARM", "QNf", "TimeUS,Name,Value")
+        out += b"".join(_df(64, "QNf", 0, k.encode(), float(v)) for k, v in params.items())
     names = {k: "IMU" if k == 0 else f"IMU{k + 1}" for k in instances}
     if old_style:
         for k in instances:

@@ -134,3 +134,30 @@ def test_firmware_export_places_axes_by_name_not_position(tmp_path, capsys):
     assert "x, y, z" in capsys.readouterr().err
     assert main(["-q", "export", str(yx), "-f", "px4", "--index", "7",
                  "--out", str(tmp_path / "d.params")]) == 2
+
+
+def test_logs_recorded_with_the_firmware_correction_on_are_flagged(tmp_path):
+    """ArduPilot logs the rates after INS_TCAL and the board rotation; a fit of such a log
+    carries warnings naming the parameter, and the exported file repeats them."""
+    from fogbayes.data.logs import read_log
+
+    ulg = tmp_path / "on.ulg"
+    W.write_ulog(ulg, {("sensor_gyro", 0): W.series(n=500)}, params={"TC_G_ENABLE": 1})
+    assert read_log(ulg).meta["px4_tc_g_enable"] == 1
+    log = tmp_path / "on.bin"
+    W.write_dataflash(log, {0: W.series(n=8000), 1: W.series(n=8000, seed=2)},
+                      params={"AHRS_ORIENTATION": 4, "INS_TCAL1_ENABLE": 0,
+                              "INS_TCAL2_ENABLE": 1})
+    meta = read_log(log, instance=1).meta
+    assert (meta["ardupilot_ahrs_orientation"], meta["ardupilot_tcal_enable"]) == (4, 1)
+    assert read_log(log).meta["ardupilot_tcal_enable"] == 0  # instance 0: INS_TCAL1
+    fit = tmp_path / "fit.json"
+    assert main(["-q", "fit", str(log), "-m", "bias-t", "--instance", "1", "--json",
+                 str(fit)]) == 0
+    warnings = _doc(fit)["warnings"]
+    assert any("INS_TCAL2_ENABLE = 1" in w for w in warnings)
+    assert any("AHRS_ORIENTATION = 4" in w for w in warnings)
+    out = tmp_path / "tcal.param"
+    assert main(["-q", "export", str(fit), "-f", "ardupilot", "--index", "2", "--out",
+                 str(out)]) == 0
+    assert "# warning:" in out.read_text() and "INS_TCAL2_ENABLE = 1" in out.read_text()

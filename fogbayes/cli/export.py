@@ -43,13 +43,16 @@ def _ordered(paths: list[Path]) -> list[tuple[dict, str]]:
     return [(doc, where) for n in "xyz"[:len(names)] for m, doc, where in named if m == n]
 
 
-def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
-    """(basis, coef) per axis from bias-t fit or loop documents, in x, y, z order, and the
-    temperature span the fits saw (None when no document states one)."""
+def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None, list[str]]:
+    """(basis, coef) per axis from bias-t fit or loop documents, in x, y, z order; the
+    temperature span the fits saw (None when no document states one); the documents'
+    warnings about the logged rates (fogbayes/data/logs/firmware.py)."""
     from ..errors import FogbayesError
     from ..export import ExportError, basis_from_dict, basis_from_loop
 
-    axes, spans = [], []
+    from ..data.logs.firmware import PREFIX as FIRMWARE_PREFIX
+
+    axes, spans, notes = [], [], []
     for doc, p in _ordered(paths):
         if doc.get("schema", "").startswith("fogbayes.loop"):
             axes.append(basis_from_loop(doc, source=p))
@@ -69,10 +72,12 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None]:
                                 fix="run 'fogbayes fit' with --output-unit set to the recording's rate unit")
         axes.append((basis_from_dict(params["basis"], source=p), params["coef"]))
         spans.append((params.get("valid_range") or {}).get("T"))
+        notes.extend(f"{p}: {w}" for w in doc.get("warnings") or []
+                     if w.startswith(FIRMWARE_PREFIX))
     spans = [sp for sp in spans if sp is not None]
-    if spans:  # the span of the data the fits saw (else: the bases' centre +- scale)
-        return axes, (min(sp[0] for sp in spans), max(sp[1] for sp in spans))
-    return axes, None
+    # the span of the data the fits saw (else: the bases' centre +- scale)
+    span = (min(sp[0] for sp in spans), max(sp[1] for sp in spans)) if spans else None
+    return axes, span, notes
 
 
 @app.command()
@@ -146,7 +151,7 @@ def export(
     else:
         from .. import export as ex
 
-        axes, span = _axes(docs)
+        axes, span, notes = _axes(docs)
         if len(axes) > 3:
             raise FogbayesError(f"{fmt} takes 1 to 3 axes, got {len(axes)}", column="DOCS",
                                 fix="pass the x, y, z documents in that order")
@@ -158,6 +163,9 @@ def export(
             params = ex.ardupilot_gyro_parameters(axes, imu_index=1 if index is None else index,
                                                   t_range=span)
             text = ex.ardupilot_param_file(params)
+        for note in notes:  # in the file and on the screen: the log's rates were not raw
+            say(f"warning: {note}")
+        text = "".join(f"# warning: {n}\n" for n in notes) + text
     if out == "-":
         typer.echo(text, nl=False)
     else:

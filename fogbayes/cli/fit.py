@@ -197,6 +197,11 @@ def fit(
         with progress(what), about_file(rec):
             docs[name] = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes,
                                           seed=seed, **options)
+        from ..data.logs.firmware import rate_warnings
+
+        more = rate_warnings(recording.meta.extra)  # a log's rates already corrected/rotated
+        if more:
+            docs[name]["warnings"] = list(docs[name].get("warnings") or []) + more
     if None in docs:
         doc = docs[None]
     else:  # one document, one fit document per axis (fogbayes/data/axes_doc.py)

@@ -55,6 +55,7 @@ def read_dataflash(path: Path, *, topic: str | None, instance: int | None, axis:
             try:
                 name, k, key = _select(reader, src, topic, instance)
                 rows = _rows(reader, src, name, k, key)
+                params = _params(reader, ("AHRS_ORIENTATION", f"INS_TCAL{k + 1}_ENABLE"))
             finally:
                 getattr(reader, "close", lambda: None)()  # pymavlink < 2.4.40 has none
         except (FileFormatError, LogSelectionError, NoGyroError, MemoryError):
@@ -74,11 +75,29 @@ def read_dataflash(path: Path, *, topic: str | None, instance: int | None, axis:
         meta.setdefault("temperature_alignment", f"same message ({name}.{rows['temp_field']})")
     else:
         meta["temperature_alignment"] = f"none: {name} carries no temperature"
+    # what the logged rates already went through (the firmware's thermal correction and
+    # board rotation come before IMU logging): a thermal export needs neither
+    if "AHRS_ORIENTATION" in params:
+        meta["ardupilot_ahrs_orientation"] = int(params["AHRS_ORIENTATION"])
+    if f"INS_TCAL{k + 1}_ENABLE" in params:
+        meta["ardupilot_tcal_enable"] = int(params[f"INS_TCAL{k + 1}_ENABLE"])
     meta.update(notes_meta(notes))
     scale = 1e3 if rows["time_field"] == "TimeMS" else 1e6
     return gyro_table(src, time=np.asarray(rows["t"], dtype=np.float64) / scale,
                       gyro=np.asarray(rows["gyro"], dtype=np.float64), temperature=temp,
                       meta=meta, axis=axis, what=f"{name} instance {k}")
+
+
+def _params(reader, names) -> dict:
+    """The logged values (PARM messages) of ``names``, where the log has them."""
+    if "PARM" not in reader.name_to_id:
+        return {}
+    reader.rewind()
+    out = {}
+    while (m := reader.recv_match(type="PARM")) is not None:
+        if getattr(m, "Name", None) in names:
+            out[m.Name] = m.Value
+    return out
 
 
 def _select(reader, src: str, topic: str | None, instance: int | None):

@@ -85,6 +85,10 @@ def read_ulog(path: Path, *, topic: str | None, instance: int | None, axis: str)
         meta["logging_dropout_ms"] = int(sum(d.duration for d in ulog.dropouts))
     if ulog.file_corruption:
         meta["file_corruption_detected"] = True
+    # a thermal calibration fitted on rates PX4 already corrected is a fit of the leftover
+    params = getattr(ulog, "initial_parameters", {}) or {}
+    if "TC_G_ENABLE" in params:
+        meta["px4_tc_g_enable"] = int(params["TC_G_ENABLE"])
     meta.update(notes_meta(notes))
     gyro = np.column_stack([np.asarray(data[f], dtype=np.float64) for f in fields])
     return gyro_table(src, time=np.asarray(data[time_field], dtype=np.float64) / 1e6,
