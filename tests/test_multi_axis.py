@@ -150,6 +150,12 @@ def test_logs_recorded_with_the_firmware_correction_on_are_flagged(tmp_path):
                               "INS_TCAL2_ENABLE": 1})
     meta = read_log(log, instance=1).meta
     assert (meta["ardupilot_ahrs_orientation"], meta["ardupilot_tcal_enable"]) == (4, 1)
+    info = tmp_path / "info.json"
+    assert main(["-q", "info", str(log), "--instance", "1", "--axis", "z", "--json",
+                 str(info)]) == 0
+    doc = _doc(info)
+    assert doc["log"]["log_instance"] == 1 and doc["log"]["axis"] == "z"
+    assert any("INS_TCAL2_ENABLE = 1" in w for w in doc["warnings"])
     assert read_log(log).meta["ardupilot_tcal_enable"] == 0  # instance 0: INS_TCAL1
     fit = tmp_path / "fit.json"
     assert main(["-q", "fit", str(log), "-m", "bias-t", "--instance", "1", "--json",

@@ -29,7 +29,19 @@ def summary_document(rec, rec_path) -> dict:
                          for j, nm in enumerate(rec.temperature_names)},
         "input_rate": None if rec.input_rate is None else
         {"min": float(rec.input_rate.min()), "max": float(rec.input_rate.max())},
+        **_log_part(rec.meta.extra),
     }
+
+
+def _log_part(extra: dict) -> dict:
+    """For a gyro log: what the reader recorded (format, topic, instance, axis, temperature
+    alignment, dropouts, firmware parameters) and the warnings about its rates."""
+    if "log_format" not in extra:
+        return {}
+    from ..data.logs.firmware import rate_warnings
+
+    keep = {k: v for k, v in extra.items() if isinstance(v, (str, int, float, bool))}
+    return {"log": keep, "warnings": rate_warnings(extra)}
 
 
 def text_summary(doc: dict) -> str:
@@ -50,6 +62,12 @@ def text_summary(doc: dict) -> str:
     if doc["input_rate"] is not None:
         lines.append(f"  input_rate: {doc['input_rate']['min']:.6g} ... "
                      f"{doc['input_rate']['max']:.6g} deg/s")
+    log = doc.get("log")
+    if log:
+        lines.append(f"  log: {log.get('log_format')}, {log.get('log_topic')} instance "
+                     f"{log.get('log_instance')}, axis {log.get('axis', 'x')}; time "
+                     f"{log.get('time_source')}")
+    lines += [f"  warning: {w}" for w in doc.get("warnings") or []]
     return "\n".join(lines)
 
 
