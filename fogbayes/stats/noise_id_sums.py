@@ -35,88 +35,24 @@ _FIELDS = 5
 DMAX = 3
 
 
-@numba.njit(cache=True, nogil=True)
-def _lag1_sums(z):
-    """[N, sum i*x, then per d = 0..3: sum, sumsq, lag-1 products, first, last].
-
-    Orders 0-3 are always formed (Hadamard needs 3). The first four finite values start
-    the differences; the main loop then has no branch but the finite test, and keeps every
-    sum in a register.
-    """
-    head = np.zeros(4)
-    n = 0
-    i = 0
-    while i < z.shape[0] and n < 4:
-        if z[i] - z[i] == 0.0:
-            head[n] = z[i]
-            n += 1
-        i += 1
-    out = np.zeros(2 + _FIELDS * (DMAX + 1))
-    if n < 4:  # too short for the identification anyway (it needs 30 points)
-        out[0] = n
-        return out
-    c = head[0]
-    x0, x1, x2, x3 = 0.0, head[1] - c, head[2] - c, head[3] - c
-    u1, u2, u3 = x1 - x0, x2 - x1, x3 - x2
-    w2, w3 = u2 - u1, u3 - u2
-    e3 = w3 - w2
-    s0 = x1 + x2 + x3
-    q0 = x1 * x1 + x2 * x2 + x3 * x3
-    p0 = x1 * x2 + x2 * x3
-    six = x1 + 2.0 * x2 + 3.0 * x3
-    s1, q1, p1 = u1 + u2 + u3, u1 * u1 + u2 * u2 + u3 * u3, u1 * u2 + u2 * u3
-    s2, q2, p2 = w2 + w3, w2 * w2 + w3 * w3, w2 * w3
-    s3, q3, p3 = e3, e3 * e3, 0.0
-    lx, lu, lw, le = x3, u3, w3, e3
-    k = 4.0
-    for j in range(i, z.shape[0]):
-        v = z[j]
-        if not v - v == 0.0:  # NaN or inf: the cluster is dropped, its neighbours adjoin
-            continue
-        x = v - c
-        u = x - lx
-        w = u - lu
-        e = w - lw
-        six += k * x
-        s0 += x
-        q0 += x * x
-        p0 += lx * x
-        s1 += u
-        q1 += u * u
-        p1 += lu * u
-        s2 += w
-        q2 += w * w
-        p2 += lw * w
-        s3 += e
-        q3 += e * e
-        p3 += le * e
-        lx, lu, lw, le = x, u, w, e
-        k += 1.0
-    out[0] = k
-    out[1] = six
-    out[2:7] = (s0, q0, p0, x0, lx)
-    out[7:12] = (s1, q1, p1, u1, lu)
-    out[12:17] = (s2, q2, p2, w2, lw)
-    out[17:22] = (s3, q3, p3, e3, le)
-    return out
-
-
 _FAST = {"reassoc", "contract"}  # SIMD reductions; NaN still propagates (checked below)
 
 
 @numba.njit(cache=True, nogil=True, fastmath=_FAST)
-def _lag1_sums_dense(z):
-    """The sums of :func:`_lag1_sums` for a series without NaN, written without a recurrence.
+def _lag1_sums(z):
+    """[N, sum i*x, then per d = 0..3: sum, sumsq, lag-1 products, first, last] of a series
+    without NaN (orders 0-3 are always formed: Hadamard needs 3).
 
-    Every difference is formed from shifted slices of ``z`` (``u_j = x_j - x_{j-1}``, ...),
-    so the compiler can use SIMD lanes (the recurrence form, and indexing ``z[j - 1]``, whose
-    negative-index check blocks it, cannot): about 4x faster. A NaN makes the sums NaN, and
-    the caller then takes the NaN-skipping loop.
+    Every difference is formed from shifted slices of ``z`` (``u_j = x_j - x_{j-1}``, ...)
+    rather than by a recurrence, and no index is computed (Numba's negative-index check on
+    ``z[j - 1]`` blocks vectorising), so the compiler can use SIMD lanes: about 4.5x the
+    recurrence loop this replaced. Fewer than 5 values: only N is set (the identification
+    needs 30 anyway).
     """
     n = z.shape[0]
     out = np.zeros(2 + _FIELDS * (DMAX + 1))
     if n < 5:
-        out[0] = -1.0  # let the caller take the general loop
+        out[0] = n
         return out
     c = z[0]
     x = np.empty(4)
@@ -194,12 +130,13 @@ def pair_means(z: np.ndarray) -> np.ndarray:
 
 
 def lag1_sums(z: np.ndarray) -> np.ndarray:
-    """The sums of :func:`_lag1_sums` for float64 ``z`` (NaN values skipped)."""
+    """The sums of :func:`_lag1_sums` for float64 ``z``; a non-finite value (a cluster with a
+    gap) is dropped and its neighbours adjoin."""
     z = np.ascontiguousarray(z, dtype=np.float64)
-    out = _lag1_sums_dense(z)
-    if out[0] > 0 and np.isfinite(out[2]) and np.isfinite(out[7]):
+    out = _lag1_sums(z)
+    if np.isfinite(out[2]) and np.isfinite(out[7]):  # a NaN anywhere reaches both
         return out
-    return _lag1_sums(z)  # a NaN (or inf) among the values: the skipping loop
+    return _lag1_sums(np.ascontiguousarray(z[np.isfinite(z)]))
 
 
 def _mean_removed_lag1(n, s1, s2, p, first, last) -> float:
