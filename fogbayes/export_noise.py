@@ -33,14 +33,13 @@ from __future__ import annotations
 import math
 
 from .errors import FogbayesError
+from .models.allan import BI_FACTOR, UNITS as DOC_UNITS  # the document's units, ADEV floor / B
 
 DEG = math.pi / 180.0
 #: document unit -> SI factor per term (see the table above)
 TO_SI = {"Q": (DEG / 3600.0, "rad"), "N": (DEG / 60.0, "rad/s/sqrt(Hz)"),
          "B": (DEG / 3600.0, "rad/s"), "K": (DEG / 3600.0 / 60.0, "rad/s^2/sqrt(Hz)"),
          "R": (DEG / 3600.0 ** 2, "rad/s^2")}
-DOC_UNITS = {"Q": "arcsec", "N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h^1.5", "R": "deg/h^2"}
-BI_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)  # ADEV floor = 0.664 B
 
 
 class NoiseExportError(FogbayesError):

@@ -134,20 +134,18 @@ def export(
         from ..data.axes_doc import per_axis
 
         # a multi-axis document (fogbayes allan --axis all) counts as one document per axis
-        loaded = [(sub, where) for p in docs
-                  for _, sub, where in per_axis(read_calibration(p), str(p))]
+        named = [row for p in docs for row in per_axis(read_calibration(p), str(p))]
         if fmt == "ieee952":
             if len(docs) != 1:
                 raise FogbayesError(f"ieee952 takes one Allan document, got {len(docs)}",
                                     column="DOCS", fix="export each file on its own")
-            names = [name for name, _, _ in per_axis(read_calibration(docs[0]))]
-            out_doc = ieee952_document(*loaded[0][:1], source=loaded[0][1]) \
-                if names == [None] else {"schema": "fogbayes.ieee952/1", "axes": {
-                    name: ieee952_document(sub, source=where)
-                    for name, (sub, where) in zip(names, loaded)}}
+            parts = {name: ieee952_document(sub, source=where) for name, sub, where in named}
+            out_doc = parts[None] if None in parts else \
+                {"schema": "fogbayes.ieee952/1", "axes": parts}
             text = json.dumps(out_doc, indent=2) + "\n"
         else:
-            text = kalibr_yaml(loaded, quantile=quantile, topic=topic)
+            text = kalibr_yaml([(sub, where) for _, sub, where in named], quantile=quantile,
+                               topic=topic)
     else:
         from .. import export as ex
 
