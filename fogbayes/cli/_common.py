@@ -136,6 +136,25 @@ def channels(axis: str | None, column: str) -> list[tuple[str | None, dict]]:
     return [(None, {"axis": axis, "column": column})]
 
 
+def fit_channels(rec: Path, axis: str | None, column: str, load_kw: dict, fit,
+                 what: str) -> tuple[dict, dict]:
+    """Load each channel that ``--axis``/``--column`` names (:func:`channels`), fit it with
+    ``fit(recording) -> document``, and return the per-channel documents and the one to
+    write: the single document, or the multi-axis one (:mod:`fogbayes.data.axes_doc`)."""
+    from ..errors import about_file
+
+    docs = {}
+    for name, pick in channels(axis, column):
+        recording = load_recording(rec, **load_kw, **pick)
+        with progress(what + ("" if name is None else f", axis {name}")), about_file(rec):
+            docs[name] = fit(recording)
+    if None in docs:
+        return docs, docs[None]
+    from ..data.axes_doc import axes_document
+
+    return docs, axes_document(docs, source=str(rec))
+
+
 def write_json(obj: Any, out: Path | str) -> None:
     """Write ``obj`` as JSON to ``out``, atomically (:mod:`fogbayes.data.atomic`); ``-``
     means stdout."""

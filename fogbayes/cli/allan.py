@@ -13,10 +13,9 @@ import typer
 
 from ._app import app
 from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
-                      TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
-                      write_json)
+                      TIME_COLUMN_OPT, refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, channels
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, fit_channels
 
 _TAUS = ("octave", "decade", "dense", "all")
 
@@ -73,7 +72,7 @@ def allan(
     With several axes (--axis all or x,z for a gyro log, --column gx,gy,gz for a table) the
     document holds one Allan document per axis under "axes" (docs/logs.md).
     """
-    from ..errors import FogbayesError, about_file
+    from ..errors import FogbayesError
     from ..data.atomic import atomic_path
     from ..workflow.allan import fit_recording
 
@@ -88,24 +87,15 @@ def allan(
         from ..plot.style import figure_format
 
         figure_format(plot)  # an unknown extension fails now, not after the fit
-    docs = {}
-    for name, pick in channels(axis, column):
-        recording = load_recording(rec, time_column=time_column,
-                                   output_unit=output_unit, scale_factor=scale_factor,
-                                   time_unit=time_unit, temperature_scale=temperature_scale,
-                                   temperature_offset=temperature_offset,
-                                   topic=topic, instance=instance, **pick)
-        what = "Allan deviation and noise fit" + (" (posterior)" if bayes else "") + \
-            ("" if name is None else f", axis {name}")
-        with progress(what), about_file(rec):
-            docs[name] = fit_recording(recording, model="allan", bayes=bayes, seed=seed,
-                                       taus=taus, per_decade=per_decade)
-    if None in docs:
-        doc = docs[None]
-    else:  # one document, one fit document per axis (fogbayes/data/axes_doc.py)
-        from ..data.axes_doc import axes_document
-
-        doc = axes_document(docs, source=str(rec))
+    load_kw = dict(time_column=time_column, output_unit=output_unit,
+                   scale_factor=scale_factor, time_unit=time_unit,
+                   temperature_scale=temperature_scale, temperature_offset=temperature_offset,
+                   topic=topic, instance=instance)
+    docs, doc = fit_channels(
+        rec, axis, column, load_kw,
+        lambda r: fit_recording(r, model="allan", bayes=bayes, seed=seed, taus=taus,
+                                per_decade=per_decade),
+        "Allan deviation and noise fit" + (" (posterior)" if bayes else ""))
     write_json(doc, json_out)
     for name, one in docs.items():
         for line in summary_lines(one):

@@ -14,10 +14,10 @@ import typer
 
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
-                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      progress, refuse_overwrite, say, write_json)
+                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT,
+                      refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, channels
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, fit_channels
 
 
 #: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
@@ -175,7 +175,6 @@ def fit(
     With several axes (--axis all or x,z for a gyro log, --column gx,gy,gz for a table) the
     document holds one fit document per axis under "axes" (docs/logs.md).
     """
-    from ..errors import about_file
     from ..workflow import workflow_for
 
     refuse_overwrite({"the recording": rec}, {"--json": json_out})
@@ -184,30 +183,22 @@ def fit(
     for key, value in (("processing", processing), ("noise", noise)):
         if value is not None:
             options[key] = value
-    docs = {}
-    for name, pick in channels(axis, column):
-        recording = load_recording(rec, time_column=time_column,
-                                   output_unit=output_unit, scale_factor=scale_factor,
-                                   temperature=temperature, input_rate=input_rate,
-                                   time_unit=time_unit, temperature_scale=temperature_scale,
-                                   temperature_offset=temperature_offset,
-                                   topic=topic, instance=instance, **pick)
-        what = f"fitting {model} to {recording.n} samples" + \
-            (" (posterior)" if bayes else "") + ("" if name is None else f", axis {name}")
-        with progress(what), about_file(rec):
-            docs[name] = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes,
-                                          seed=seed, **options)
-        from ..data.logs.firmware import rate_warnings
+    from ..data.logs.firmware import rate_warnings
 
+    def fit_one(recording) -> dict:
+        doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,
+                               **options)
         more = rate_warnings(recording.meta.extra)  # a log's rates already corrected/rotated
         if more:
-            docs[name]["warnings"] = list(docs[name].get("warnings") or []) + more
-    if None in docs:
-        doc = docs[None]
-    else:  # one document, one fit document per axis (fogbayes/data/axes_doc.py)
-        from ..data.axes_doc import axes_document
+            doc["warnings"] = list(doc.get("warnings") or []) + more
+        return doc
 
-        doc = axes_document(docs, source=str(rec))
+    load_kw = dict(time_column=time_column, output_unit=output_unit,
+                   scale_factor=scale_factor, temperature=temperature, input_rate=input_rate,
+                   time_unit=time_unit, temperature_scale=temperature_scale,
+                   temperature_offset=temperature_offset, topic=topic, instance=instance)
+    docs, doc = fit_channels(rec, axis, column, load_kw, fit_one,
+                             f"fitting {model}" + (" (posterior)" if bayes else ""))
     write_json(doc, json_out)
     for name, one in docs.items():
         tag = "" if name is None else f"[{name}] "
