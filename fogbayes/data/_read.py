@@ -318,6 +318,8 @@ def read_npz(path: Path) -> Table:
                               fix=_NPZ_FIX) from None
     meta_arr = arrays.pop("__meta__", None)
     meta = {} if meta_arr is None else _json_meta(str(meta_arr[()]), src, "the '__meta__' array")
+    if "columns" in arrays or ("data" in arrays and arrays["data"].ndim == 2):
+        arrays = _matrix_layout(arrays, meta, src)
     length = None
     for key, arr in arrays.items():
         if arr.ndim != 1:
@@ -330,6 +332,40 @@ def read_npz(path: Path) -> Table:
                              f"{length[1]}", file=src, column=key,
                              fix="store columns of one length (one value per time stamp)")
     return Table(arrays, meta)
+
+
+def _matrix_layout(arrays: dict, meta: dict, src: str) -> dict:
+    """Columns from the matrix layout: a 2-D ``data`` array, its column names in ``columns``
+    (strings) and, optionally, the sample rate in ``fs_hz`` (a scalar; a ``time`` column of
+    ``k / fs_hz`` is made when the file has none). Data sets such as the ADIS16405 static
+    runs (R package imudata) come this way."""
+    fix = ("store a 2-D 'data' array (rows = samples), its column names as a 1-D string "
+           "array 'columns' and the sample rate as 'fs_hz', or one 1-D array per column")
+    data, names = arrays.pop("data", None), arrays.pop("columns", None)
+    if data is None or data.ndim != 2 or names is None or names.ndim != 1 \
+            or names.dtype.kind != "U" or names.size != data.shape[1]:
+        got = "no 'data'" if data is None else f"'data' of shape {data.shape}"
+        raise FileFormatError(f"matrix layout: {got} and "
+                              f"{'no' if names is None else names.size} column name(s)",
+                              file=src, column="columns" if names is not None else "data",
+                              fix=fix)
+    _no_duplicates([str(c) for c in names], src, "column")
+    cols = {str(c): np.ascontiguousarray(data[:, j]) for j, c in enumerate(names)}
+    clash = sorted(set(cols) & set(arrays))
+    if clash:
+        raise DuplicateColumnError(f"column '{clash[0]}' is both in 'data' and an array of "
+                                   "its own", file=src, column=clash[0], fix=fix)
+    fs = arrays.pop("fs_hz", None)
+    if fs is not None:
+        if fs.size != 1 or not np.isfinite(fs.ravel()[0]) or fs.ravel()[0] <= 0:
+            raise MetadataError("'fs_hz' must be one positive sample rate", file=src,
+                                column="fs_hz", fix=fix)
+        meta.setdefault("sample_rate", float(fs.ravel()[0]))
+        if "time" not in arrays and "time" not in cols:
+            cols["time"] = np.arange(data.shape[0]) / float(fs.ravel()[0])
+            meta.setdefault("time", "made from fs_hz (the file has no time stamps)")
+    cols.update(arrays)
+    return cols
 
 
 def read_npy_header(fh) -> tuple[tuple[int, ...], bool, np.dtype]:
@@ -353,6 +389,8 @@ def _read_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, src: str)
         elif dtype.hasobject:
             raise FileFormatError(f"array '{key}' holds Python objects (pickled data is never "
                                   "loaded)", file=src, column=key, fix=_NPZ_FIX)
+        elif key == "columns" and dtype.kind == "U" and len(shape) == 1:
+            pass  # the names of a 2-D 'data' array's columns (matrix layout, see read_npz)
         elif dtype.kind not in "biuf" or dtype.fields is not None:
             raise FileFormatError(f"array '{key}' has dtype {dtype}, not real numbers",
                                   file=src, column=key, fix=_NPZ_FIX)

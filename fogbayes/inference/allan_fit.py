@@ -200,8 +200,9 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     on = mask > 0
     Jm = J[:, on]
     info_mat = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / _PENALTY_SD**2
-    se = np.zeros(5)
-    se[on] = np.sqrt(np.diag(np.linalg.inv(info_mat)))
+    cov = np.zeros((5, 5))
+    cov[np.ix_(on, on)] = np.linalg.inv(info_mat)
+    se = np.sqrt(np.diag(cov))
     value = np.exp(logp) * mask
     converged = bool(np.isfinite(loss) and gnorm < 1e-4 * max(1.0, abs(loss)))
     target = log_obs - b
@@ -223,7 +224,8 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     # e.g. a sine, can put the estimate above the cap: the interval must still hold it)
     high = np.exp(np.minimum(logp + half, np.maximum(np.log(upper_caps(data, keep)), logp)))
     return AllanFit("wls", _estimates(value, low, high, mask), AllanParams(*value), converged,
-                    {"logp": logp, "se_log": se * np.sqrt(dispersion), "chi2": chi2, "dof": dof,
+                    {"logp": logp, "se_log": se * np.sqrt(dispersion),
+                     "cov_log": cov * dispersion, "chi2": chi2, "dof": dof,
                      "gof_p": gof_p, "dispersion": dispersion, "keep": keep,
                      "d_chi2_without": dict(zip(TERMS, d_chi2)), "loss": loss,
                      "gradient_norm": gnorm})

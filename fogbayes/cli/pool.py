@@ -1,0 +1,128 @@
+"""``fogbayes pool RUNS... --json OUT``: the noise of a population of runs or units."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from ._app import app
+from ._common import (AXIS_OPT, COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
+                      TIME_COLUMN_OPT, TIME_UNIT_OPT, channels, load_recording, progress,
+                      refuse_overwrite, say, write_json)
+
+_MODELS = ("allan",)
+
+
+def recording_paths(paths: list[Path]) -> list[Path]:
+    """The recordings named: files as given, folders expanded to the recordings they hold
+    (.csv, .parquet, .npz and gyro logs, sorted by name; other files ignored)."""
+    from ..data.io import FORMATS
+    from ..data.logs import LOG_SUFFIXES
+    from ..errors import FileFormatError
+
+    out = []
+    for p in paths:
+        if p.is_dir():
+            suffixes = (set(FORMATS) - {".txt"}) | set(LOG_SUFFIXES)  # .txt: notes, too often
+            found = sorted(q for q in p.iterdir() if q.is_file() and q.suffix.lower() in suffixes)
+            if not found:
+                raise FileFormatError("the folder holds no recordings", file=str(p),
+                                      fix="name the files, or a folder of .csv/.parquet/.npz "
+                                          "files or gyro logs")
+            out += found
+        elif p.exists():
+            out.append(p)
+        else:
+            raise FileFormatError("file not found", file=str(p), fix="check the path")
+    return out
+
+
+def _names(recs, paths) -> list[str]:
+    """Unit names: the sensor ids, or the file names where ids repeat."""
+    ids = [r.meta.sensor_id for r in recs]
+    return ids if len(set(ids)) == len(ids) else [p.name for p in paths]
+
+
+@app.command()
+def pool(
+    paths: list[Path] = typer.Argument(..., help="Recordings (one per run or unit), or "
+                                                 "folders of them."),
+    json_out: str = typer.Option(..., "--json", help="Pool document to write ('-' = stdout)."),
+    model: str = typer.Option("allan", "--model", "-m", help="What to pool: allan (the "
+                              "five-term noise model)."),
+    terms: str = typer.Option("N,B,K", help="Noise terms to pool (of Q, N, B, K, R)."),
+    report: Path = typer.Option(None, "--report", help="Also write the HTML pool report."),
+    flag_level: float = typer.Option(0.01, help="Flag a unit whose leave-one-out "
+                                     "p-value against the population is below this."),
+    seed: int = typer.Option(0, help="Seed of the sampler."),
+    column: str = COLUMN_OPT,
+    time_column: str = TIME_COLUMN_OPT,
+    time_unit: str = TIME_UNIT_OPT,
+    axis: str = AXIS_OPT,
+    output_unit: str = OUTPUT_UNIT_OPT,
+    scale_factor: float = SCALE_FACTOR_OPT,
+    quiet: bool = QUIET_OPT,
+):
+    """Pool the noise of several runs or units of one sensor type (hierarchical model).
+
+    Each recording is a unit (a sensor, or one run of a sensor). Its five-term Allan fit (as 'fogbayes allan' makes it) enters a population model of log N, log B, log K: the population median with its 90 % interval, how much units differ (the between-unit spread), the range of a new unit of this type, each unit shrunk toward the population, and units outside it flagged (leave-one-out p-value below --flag-level). With several columns (--column gx,gy,gz) or axes (--axis all) each is pooled on its own.
+
+    Examples:
+      fogbayes pool runs/ --json pool.json --report pool.html
+      fogbayes pool imu1.npz imu2.npz imu3.npz --column gyro_x_dps,gyro_y_dps \\
+          --output-unit deg/s --json pool.json
+    """
+    from ..errors import ArgumentError, about_file
+    from ..models.allan import TERMS
+    from ..pool.allan import fit_unit, pool_allan, pool_document
+
+    if model not in _MODELS:
+        raise ArgumentError(f"cannot pool model '{model}'", column="--model",
+                            fix=f"use one of {', '.join(_MODELS)}")
+    chosen = [t.strip() for t in terms.split(",") if t.strip()]
+    bad = [t for t in chosen if t not in TERMS]
+    if bad or not chosen or len(set(chosen)) < len(chosen):
+        raise ArgumentError(f"--terms {terms!r}: " + (f"'{bad[0]}' is not a noise term" if bad
+                                                      else "name each term once"),
+                            column="--terms", fix="give some of Q, N, B, K, R, e.g. N,B,K")
+    if not 0.0 < flag_level < 1.0:
+        raise ArgumentError(f"--flag-level is {flag_level:g}; it must lie in (0, 1)",
+                            column="--flag-level", fix="e.g. --flag-level 0.01")
+    files = recording_paths(paths)
+    refuse_overwrite({f"recording {i + 1}": p for i, p in enumerate(files)},
+                     {"--json": json_out, "--report": report})
+    if len(files) < 2:
+        raise ArgumentError(f"a population needs at least two recordings, got {len(files)}",
+                            column="PATHS", fix="name two or more runs or units")
+    pools = {}
+    for name, pick in channels(axis, column):
+        recs, units = [], []
+        for f in files:
+            recs.append(load_recording(f, time_column=time_column, time_unit=time_unit,
+                                       output_unit=output_unit, scale_factor=scale_factor,
+                                       **pick))
+        names = _names(recs, files)
+        for f, rec, unit_name in zip(files, recs, names):
+            with progress(f"Allan fit of {unit_name}" + ("" if name is None else f", {name}")), \
+                    about_file(f):
+                units.append(fit_unit(rec, name=unit_name))
+        with progress("pooling" + ("" if name is None else f" {name}")):
+            pools[name or column] = pool_allan(units, terms=chosen, seed=seed,
+                                               flag_level=flag_level)
+    doc = pool_document(pools, model=model)
+    write_json(doc, json_out)
+    for name, p in pools.items():
+        say(f"[{name}] {len(p['units'])} units, converged={p['converged']}")
+        for t in p["terms"]:
+            m, f = p["population"][t]["median"], p["population"][t]["spread"]["factor"]
+            say(f"  {t} population {m['value']:.4g} [{m['low']:.4g}, {m['high']:.4g}] {m['unit']}, "
+                f"units differ by x{f['value']:.3g} [x{f['low']:.3g}, x{f['high']:.3g}]")
+        say("  flagged: " + (", ".join(p["flagged"]) or "none"))
+        for w in p["warnings"]:
+            say(f"  warning: {w}")
+    if report is not None:
+        from ..report.pool import write_pool_report
+
+        write_pool_report(doc, report)
+        say(f"wrote {report}")

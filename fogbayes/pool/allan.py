@@ -1,0 +1,145 @@
+r"""Pooled five-term Allan noise of several runs or units: population, spread, outliers.
+
+Each recording is one unit: its octave AVAR estimates are fitted by GLS in log space
+(:func:`fogbayes.inference.allan_fit.fit_range`, all five terms, the sensor-filtered
+shortest taus left out as ``fogbayes allan`` does), which gives :math:`y_u = \log\hat\theta_u`
+and its covariance :math:`\Sigma_u` (Gauss-Newton, widened by the dispersion when the
+goodness of fit fails). The pooled terms (default N, B, K; Q and R on request) are then
+modelled as a population (:mod:`fogbayes.pool.normal`): log N, log B, log K of the units
+are normal about a population mean with a between-unit spread, and the unpooled terms are
+marginalised (the sub-block of :math:`\Sigma_u`).
+
+What it reports, per pooled term (90 % intervals):
+
+* the population median :math:`e^{\mu}` (the typical unit),
+* the between-unit spread :math:`s` (log sd; ``factor`` :math:`e^{s}`),
+* the range of a new unit of this type (90 % of the population, with the uncertainty of
+  :math:`\mu` and :math:`s` included),
+* each unit's own (unpooled) estimate and its pooled (shrunk) estimate,
+* each unit's outlier p-value against the population fitted without it, flagged below
+  ``flag_level``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple, Sequence
+
+import numpy as np
+
+from ..models.allan import TERMS, UNITS
+
+SCHEMA = "fogbayes.pool/1"
+DEFAULT_TERMS = ("N", "B", "K")
+CI = 0.9
+FLAG_LEVEL = 0.01
+
+
+class UnitFit(NamedTuple):
+    """One unit's single-record GLS fit, what the pool needs of it."""
+
+    name: str
+    source: str | None
+    n: int
+    fs: float
+    logp: np.ndarray        # (5,) log canonical parameters
+    cov: np.ndarray         # (5, 5) their covariance
+    terms: dict             # term -> TermEstimate (90 %, low = 0 when not resolved)
+    taus_left_out: int
+    gof_p: float
+    converged: bool
+
+
+def fit_unit(rec, *, name: str | None = None) -> UnitFit:
+    """The GLS five-term fit of one recording (as ``fogbayes allan`` makes it)."""
+    from ..inference.allan_data import prepare
+    from ..inference.allan_fit import fit_range
+    from ..workflow.allan import uniform_rate
+
+    y, fs, _ = uniform_rate(rec)
+    data, fit, left_out = fit_range(prepare(y, fs))
+    return UnitFit(name or rec.meta.sensor_id, rec.meta.source, int(y.size), fs,
+                   np.asarray(fit.info["logp"]), np.asarray(fit.info["cov_log"]),
+                   dict(fit.terms), left_out, float(fit.info["gof_p"]), bool(fit.converged))
+
+
+def _interval(draws_log: np.ndarray, unit: str) -> dict:
+    lo, med, hi = np.exp(np.quantile(draws_log, [0.5 - CI / 2, 0.5, 0.5 + CI / 2]))
+    return {"value": float(med), "low": float(lo), "high": float(hi), "unit": unit}
+
+
+def _spread(s: np.ndarray) -> dict:
+    lo, med, hi = np.quantile(s, [0.5 - CI / 2, 0.5, 0.5 + CI / 2])
+    return {"log_sd": {"value": float(med), "low": float(lo), "high": float(hi)},
+            "factor": {"value": float(np.exp(med)), "low": float(np.exp(lo)),
+                       "high": float(np.exp(hi))}}
+
+
+def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
+    """Warnings the pool's reader must see: unresolved pooled terms, failed unit fits, mixed
+    sample rates."""
+    out = []
+    for t in terms:
+        missing = [u.name for u in units if u.terms[t].low <= 0.0]
+        if missing:
+            out.append(f"{t} is not resolved in {len(missing)} of {len(units)} units "
+                       f"({', '.join(missing)}: their 90 % intervals reach 0): a one-sided "
+                       f"likelihood, which the pool's normal approximation overstates; "
+                       f"record longer or pool without {t} (--terms)")
+    failed = [u.name for u in units if not u.converged]
+    if failed:
+        out.append(f"the single-unit fit did not converge for {', '.join(failed)}")
+    rates = sorted({u.fs for u in units})
+    if len(rates) > 1:
+        out.append(f"the units were sampled at different rates ({', '.join(f'{r:g}' for r in rates)} "
+                   "Hz): N, B, K are rate-independent, Q is not")
+    return out
+
+
+def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS,
+               seed: int = 0, flag_level: float = FLAG_LEVEL, **sampler) -> dict:
+    """Pool the units' five-term fits; a JSON-able document (module docstring)."""
+    from .normal import fit_pool
+
+    terms = tuple(t for t in TERMS if t in terms)
+    idx = [TERMS.index(t) for t in terms]
+    y = np.stack([u.logp[idx] for u in units])
+    cov = np.stack([u.cov[np.ix_(idx, idx)] for u in units])
+    res = fit_pool(y, cov, terms, seed=seed, flag_level=flag_level, **sampler)
+    population = {}
+    for j, t in enumerate(terms):
+        lo, hi = np.exp(np.quantile(res.new_unit[:, j], [0.5 - CI / 2, 0.5 + CI / 2]))
+        population[t] = {"median": _interval(res.mu[:, j], UNITS[t]),
+                         "spread": _spread(res.spread[:, j]),
+                         "new_unit": {"low": float(lo), "high": float(hi), "unit": UNITS[t]}}
+    rows = []
+    for i, u in enumerate(units):
+        per = {}
+        for j, t in enumerate(terms):
+            e = u.terms[t]
+            per[t] = {"single": {"value": e.value, "low": e.low, "high": e.high,
+                                 "unit": e.unit, "resolved": bool(e.low > 0)},
+                      "pooled": _interval(res.units[:, i, j], UNITS[t])}
+        p = float(res.outlier_p[i])
+        rows.append({"name": u.name, "source": u.source, "n": u.n, "fs": u.fs,
+                     "taus_left_out": u.taus_left_out, "gof_p": u.gof_p,
+                     "converged": u.converged, "terms": per,
+                     "outlier": {"p": p, "flagged": bool(p < flag_level),
+                                 "method": res.diagnostics["loo_method"][i]}})
+    diag = {k: v for k, v in res.diagnostics.items() if k != "loo_method"}
+    flagged = [r["name"] for r in rows if r["outlier"]["flagged"]]
+    return {"terms": list(terms), "ci": CI, "flag_level": flag_level,
+            "population": population, "units": rows, "flagged": flagged,
+            "warnings": check_units(units, terms), "diagnostics": diag,
+            "converged": bool(diag["converged"]),
+            "method": "hierarchical normal model of the units' log-space GLS estimates "
+                      "(fogbayes.pool.normal): NUTS on the population mean and spread, unit "
+                      "parameters integrated out exactly and drawn given each posterior draw; "
+                      "outliers by the leave-one-out posterior-predictive p-value"}
+
+
+def pool_document(pools: dict[str, dict], *, model: str = "allan") -> dict:
+    """The document ``fogbayes pool`` writes: one pool per channel (axis or column)."""
+    from .. import __version__
+
+    return {"schema": SCHEMA, "model": model, "fogbayes_version": __version__,
+            "channels": dict(pools)}

@@ -1,0 +1,245 @@
+r"""Hierarchical normal model of per-unit estimates: population, spread, shrunk units, outliers.
+
+Each unit :math:`u = 1..U` (a sensor, or one run of a sensor) gives an estimate
+:math:`y_u \in \mathbb R^P` of its own parameters :math:`\theta_u` with covariance
+:math:`\Sigma_u` (its single-unit fit; for Allan terms the GLS fit in log space,
+:func:`fogbayes.inference.allan_fit.fit_wls`). The population model is
+
+.. math::
+
+    y_u \mid \theta_u \sim \mathcal N(\theta_u, \Sigma_u), \qquad
+    \theta_u \sim \mathcal N(\mu, S), \quad S = \mathrm{diag}(s_1^2 .. s_P^2),
+
+    \mu_p \sim \mathcal N(\tilde y_p, 10^2), \qquad s_p \sim \mathrm{HalfNormal}(1),
+
+with :math:`\tilde y_p` the median of the units' estimates (the prior only fixes the scale:
+10 in log space is a factor :math:`e^{10}`; a spread of 1 in log space is a factor 2.7
+between units, so HalfNormal(1) admits anything a fleet of one type shows). The unit
+parameters integrate out exactly, :math:`y_u \sim \mathcal N(\mu, S + \Sigma_u)`, so NUTS
+samples only :math:`(\mu, \log s)`: :math:`2P` dimensions and no funnel between a unit and
+the spread. Given a draw of :math:`(\mu, S)` each unit's parameters are normal,
+
+.. math::
+
+    \theta_u \mid y, \mu, S \sim \mathcal N\big(\mu + S (S + \Sigma_u)^{-1} (y_u - \mu),\;
+        S - S (S + \Sigma_u)^{-1} S\big),
+
+drawn once per posterior draw (the shrunk per-unit posteriors). A new unit of the
+population is :math:`\mathcal N(\mu, S)` (the population's predictive range).
+
+Outliers: unit :math:`u` is judged against the population fitted *without* it (the same
+sampler with that unit's weight set to 0, all leave-one-out fits in one vmapped call):
+its posterior-predictive p-value is
+
+.. math::
+
+    p_u = \mathrm E_{\mu, S \mid y_{-u}}\Big[\Pr\big(\chi^2_P > (y_u - \mu)^\top
+        (S + \Sigma_u)^{-1} (y_u - \mu)\big)\Big],
+
+uniform for a unit of the population; it is flagged when :math:`p_u` is below the flag level.
+
+The normal likelihood of :math:`y_u` is the approximation this module makes: the GLS
+estimates of well-resolved Allan terms are close to normal in log space (their 90 %
+intervals cover 85-95 %, benchmarks/RESULTS_allan.md), a term a unit does not resolve is
+not (its likelihood is one-sided): :mod:`fogbayes.pool.allan` warns about those.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from scipy import stats
+
+MU_PRIOR_SD = 10.0
+SPREAD_PRIOR_SD = 1.0
+#: convergence rule shared with the single-record posteriors (inference/allan_bayes.py)
+R_HAT_MAX, ESS_MIN = 1.01, 200.0
+
+
+class PoolResult(NamedTuple):
+    """Posterior of the population and of each unit (log-space parameters)."""
+
+    names: tuple            # the P parameter names
+    mu: np.ndarray          # (draws, P) population mean (log space)
+    spread: np.ndarray      # (draws, P) between-unit sd s (log space)
+    units: np.ndarray       # (draws, U, P) shrunk per-unit parameters
+    new_unit: np.ndarray    # (draws, P) a new unit of the population
+    outlier_p: np.ndarray   # (U,) leave-one-out posterior-predictive p-values
+    diagnostics: dict       # r_hat, ess, divergences, converged
+
+
+def _log_marginal(y, cov, w, mu, s):
+    """sum_u w_u log N(y_u; mu, Sigma_u + diag(s^2))."""
+    def one(yu, cu):
+        c = cu + jnp.diag(s**2)
+        L = jnp.linalg.cholesky(c)
+        r = jax.scipy.linalg.solve_triangular(L, yu - mu, lower=True)
+        return -0.5 * r @ r - jnp.sum(jnp.log(jnp.diag(L))) - 0.5 * yu.size * jnp.log(2 * jnp.pi)
+
+    return jnp.sum(w * jax.vmap(one)(y, cov))
+
+
+def _potential(y, cov, w, centre):
+    from jax.scipy.stats import norm
+
+    def potential(z):
+        mu, log_s = z["mu"], z["log_s"]
+        s = jnp.exp(log_s)
+        lp = jnp.sum(norm.logpdf(mu, centre, MU_PRIOR_SD))
+        # HalfNormal(1) on s, sampled as log s (+ the Jacobian log s)
+        lp += jnp.sum(norm.logpdf(s, 0.0, SPREAD_PRIOR_SD) + jnp.log(2.0) + log_s)
+        return -(lp + _log_marginal(y, cov, w, mu, s))
+
+    return potential
+
+
+@functools.lru_cache(maxsize=8)
+def _sampler(num_warmup: int, num_samples: int):
+    """NUTS chains over (mu, log s), vmapped over chains; the unit weights are an argument,
+    so the full fit and every leave-one-out refit share one compilation per (U, P)."""
+    from numpyro.infer.hmc import hmc
+
+    init_kernel, sample_kernel = hmc(potential_fn_gen=_potential, algo="NUTS")
+
+    def chain(key, z0, y, cov, w, centre):
+        args = (y, cov, w, centre)
+        state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.95,
+                            model_args=args, rng_key=key)
+
+        def step(st, _):
+            st = sample_kernel(st, model_args=args)
+            return st, (st.z, st.diverging)
+
+        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
+        return jax.tree.map(lambda a: a[num_warmup:], zs), div[num_warmup:]
+
+    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None, None)))
+
+
+def _start(y, cov, num_chains, rng):
+    """Chains start near the precision-weighted mean and the spread of the estimates."""
+    centre = np.median(y, axis=0)
+    spread = np.maximum(np.std(y, axis=0), 0.05)
+    mu0 = centre + 0.1 * spread * rng.standard_normal((num_chains, y.shape[1]))
+    ls0 = np.log(spread) + 0.1 * rng.standard_normal((num_chains, y.shape[1]))
+    return centre, {"mu": jnp.asarray(mu0), "log_s": jnp.asarray(ls0)}
+
+
+def _summary(zs, div) -> dict:
+    from numpyro.diagnostics import summary
+
+    diag = summary({"mu": zs["mu"], "log_s": zs["log_s"]}, group_by_chain=True)
+    r_hat = max(float(np.max(diag[k]["r_hat"])) for k in ("mu", "log_s"))
+    ess = min(float(np.min(diag[k]["n_eff"])) for k in ("mu", "log_s"))
+    divergences = int(np.asarray(div).sum())
+    return {"r_hat_max": r_hat, "ess_min": ess, "divergences": divergences,
+            "converged": bool(r_hat < R_HAT_MAX and ess > ESS_MIN and divergences == 0)}
+
+
+def shrink(y, cov, mu, spread, rng) -> np.ndarray:
+    """Draws of each unit's parameters given population draws (see the module docstring).
+
+    ``y`` (U, P), ``cov`` (U, P, P), ``mu``/``spread`` (D, P) -> (D, U, P)."""
+    S = spread[:, None, :, None] * np.eye(y.shape[1]) * spread[:, None, None, :]  # (D,1,P,P)
+    A = S + cov[None]                                                          # (D,U,P,P)
+    gain = np.swapaxes(np.linalg.solve(A, np.broadcast_to(S, A.shape)), -1, -2)  # S A^-1
+    mean = mu[:, None, :] + np.einsum("duij,duj->dui", gain, y[None] - mu[:, None, :])
+    var = S - gain @ S
+    var = 0.5 * (var + np.swapaxes(var, -1, -2)) + 1e-15 * np.eye(y.shape[1])
+    L = np.linalg.cholesky(var)
+    return mean + np.einsum("duij,duj->dui", L, rng.standard_normal(mean.shape))
+
+
+def _run(y, cov, w, centre, z0, key, num_warmup, num_samples, num_chains):
+    """One posterior of (mu, s) with unit weights ``w``: draws (D, P) twice, diagnostics."""
+    keys = jax.random.split(key, num_chains)
+    zs, div = _sampler(num_warmup, num_samples)(keys, z0, jnp.asarray(y), jnp.asarray(cov),
+                                               jnp.asarray(w), jnp.asarray(centre))
+    zs = {k: np.asarray(v) for k, v in zs.items()}
+    P = y.shape[1]
+    return zs["mu"].reshape(-1, P), np.exp(zs["log_s"]).reshape(-1, P), _summary(zs, div)
+
+
+def unit_log_lik(y, cov, mu, spread) -> np.ndarray:
+    """log N(y_u; mu_d, Sigma_u + S_d) for every draw d and unit u: (D, U)."""
+    P = y.shape[1]
+    A = cov[None] + (spread[:, None, :, None] * np.eye(P) * spread[:, None, None, :])
+    r = y[None] - mu[:, None, :]
+    sign, logdet = np.linalg.slogdet(A)
+    d2 = np.einsum("dui,dui->du", r, np.linalg.solve(A, r[..., None])[..., 0])
+    return -0.5 * (d2 + logdet + P * np.log(2 * np.pi))
+
+
+def _predictive_p(yu, cu, mu, spread, log_w=None) -> float:
+    """(Weighted) mean over draws of P(chi2_P > d2(draw)) for one unit."""
+    P = yu.size
+    A = cu[None] + spread[:, :, None] * np.eye(P) * spread[:, None, :]
+    r = yu[None] - mu
+    d2 = np.einsum("di,di->d", r, np.linalg.solve(A, r[..., None])[..., 0])
+    sf = stats.chi2.sf(d2, P)
+    if log_w is None:
+        return float(sf.mean())
+    w = np.exp(log_w - np.max(log_w))
+    return float(np.sum(w * sf) / np.sum(w))
+
+
+#: leave-one-out by Pareto-smoothed importance sampling is trusted when its Pareto k is
+#: below this (Vehtari, Gelman & Gabry 2017); otherwise, and near the flag level, the unit's
+#: population is refitted without it
+PARETO_K_MAX = 0.7
+REFIT_FACTOR = 10.0
+
+
+def fit_pool(y, cov, names, *, seed: int = 0, flag_level: float = 0.01,
+             num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 4) -> PoolResult:
+    """Posterior of the population model (module docstring) from estimates ``y`` (U, P) with
+    covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
+
+    Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
+    ArviZ); a unit whose Pareto k exceeds PARETO_K_MAX or whose p-value lies within
+    REFIT_FACTOR x ``flag_level`` is refitted exactly without it (the same compiled sampler
+    with its weight set to 0), so a flag never rests on the approximation.
+    """
+    import warnings
+
+    import arviz as az
+
+    y = np.asarray(y, dtype=float)
+    cov = np.asarray(cov, dtype=float)
+    U, P = y.shape
+    if U < 2:
+        raise ValueError("a population needs at least two units")
+    rng = np.random.default_rng(seed)
+    centre, z0 = _start(y, cov, num_chains, rng)
+    key = jax.random.PRNGKey(seed)
+    run = functools.partial(_run, y, cov, centre=centre, z0=z0, num_warmup=num_warmup,
+                            num_samples=num_samples, num_chains=num_chains)
+    mu, spread, diagnostics = run(np.ones(U), key=key)
+    ll = unit_log_lik(y, cov, mu, spread)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # ArviZ warns on k > 0.7: handled by refitting
+        log_w, k_hat = az.psislw(-ll.T)  # (U, D) log ratios 1 / p(y_u | draw)
+    log_w, k_hat = np.asarray(log_w), np.asarray(k_hat)
+    outlier_p, method = np.empty(U), []
+    refits = []
+    for u in range(U):
+        p = _predictive_p(y[u], cov[u], mu, spread, log_w[u])
+        if k_hat[u] > PARETO_K_MAX or p < REFIT_FACTOR * flag_level:
+            w = np.ones(U)
+            w[u] = 0.0
+            mu_u, s_u, diag_u = run(w, key=jax.random.fold_in(key, u + 1))
+            p = _predictive_p(y[u], cov[u], mu_u, s_u)
+            refits.append(diag_u["converged"])
+            method.append("refit")
+        else:
+            method.append("psis")
+        outlier_p[u] = p
+    diagnostics.update(pareto_k=k_hat.tolist(), loo_method=method, refits=len(refits),
+                       refits_converged=int(sum(refits)))
+    units = shrink(y, cov, mu, spread, rng)
+    new_unit = mu + spread * rng.standard_normal(mu.shape)
+    return PoolResult(tuple(names), mu, spread, units, new_unit, outlier_p, diagnostics)
