@@ -106,6 +106,18 @@ def test_a_far_unit_is_flagged_by_an_exact_refit_and_the_others_are_not():
     assert lo < _dersimonian_laird(y[:, 0], cov[:, 0, 0])[0] < hi
 
 
+def test_a_datasheet_prior_moves_the_population_median_by_its_weight():
+    """A tight sheet (sd 0.01 in log) pins mu near the sheet value; a loose one (sd 3) leaves
+    it where the units put it. Same fleet shape as the other tests (one compilation)."""
+    y, cov, _ = _fleet(8, [0.0, 1.0], [0.2, 0.3], [0.05, 0.2], seed=7)
+    free = fit_pool(y, cov, ("a", "b"), seed=0)
+    tight = fit_pool(y, cov, ("a", "b"), seed=0, mu_prior=([0.5, 1.0], [0.01, MU_PRIOR_SD]))
+    loose = fit_pool(y, cov, ("a", "b"), seed=0, mu_prior=([0.5, 1.0], [3.0, MU_PRIOR_SD]))
+    assert abs(np.median(tight.mu[:, 0]) - 0.5) < 0.03
+    assert abs(np.median(loose.mu[:, 0]) - np.median(free.mu[:, 0])) < 0.03
+    assert abs(np.median(free.mu[:, 0]) - 0.5) > 0.3
+
+
 def _write_units(folder: Path, n_units: int, *, n=2**14, fs=10.0, outlier=None):
     from fogbayes import Recording, save
     from fogbayes.data import Metadata
@@ -143,6 +155,15 @@ def test_cli_pools_a_folder_writes_document_and_report(tmp_path):
     assert med["low"] < 0.01 < med["high"] * 1.1
     html = rep.read_text()
     assert "Population" in html and "unit2" in html and "data:image/png;base64," in html
+    # a datasheet prior (fogbayes prior) on the typical unit's N is recorded and applied
+    sheet = tmp_path / "sheet.json"
+    assert main(["--quiet", "prior", "--arw", "0.02", "--arw-unit", "deg/sqrt(h)",
+                 "--looseness", "1.01", "--json", str(sheet)]) == 0
+    assert main(["--quiet", "pool", str(tmp_path / "runs"), "--terms", "N,B", "--prior",
+                 str(sheet), "--json", str(tmp_path / "p2.json")]) == 0
+    p2 = json.loads((tmp_path / "p2.json").read_text())["channels"]["output"]
+    assert p2["prior"]["terms"]["N"]["value"] == 0.02 and "N" in p2["prior"]["rule"]
+    assert abs(p2["population"]["N"]["median"]["value"] / 0.02 - 1) < 0.02
 
 
 @pytest.mark.parametrize("args, key", [

@@ -187,3 +187,52 @@ def test_report_dom_has_every_section_with_figures_and_tables(demo_report):
     for b64 in images:  # every embedded figure is a decodable, non-empty PNG
         img = imread(io.BytesIO(base64.b64decode(b64)), format="png")
         assert img.shape[0] > 100 and np.ptp(img[..., :3]) > 0.5
+
+
+@pytest.fixture(scope="module")
+def pool_report(tmp_path_factory):
+    """A fleet of eight simulated units, one with four times the others' N (as in
+    tests/test_pool.py), pooled by the CLI."""
+    from fogbayes import Recording, save
+    from fogbayes.data import Metadata
+    from fogbayes.simulate.noise import allan_noise
+
+    d = tmp_path_factory.mktemp("pool")
+    rng = np.random.default_rng(11)
+    n, fs = 2**13, 10.0
+    for u in range(8):
+        N = 0.01 * np.exp(0.1 * rng.standard_normal()) * (4.0 if u == 2 else 1.0)
+        K = 0.66 * np.exp(0.2 * rng.standard_normal())
+        y = allan_noise(4 * n, fs, seed=u, Q=0.19, N=N, B=0.165, K=K)[:n]
+        save(Recording(time=np.arange(n) / fs, output=y, unit="deg/h",
+                       meta=Metadata(sensor_id=f"FOG-{u:03d}", sample_rate=fs)),
+             d / f"unit{u}.npz")
+    assert main(["--quiet", "pool", *sorted(str(p) for p in d.glob("*.npz")), "--terms", "N,B",
+                 "--json", str(d / "pool.json"), "--report", str(d / "pool.html")]) == 0
+    return d / "pool.html"
+
+
+def test_pool_report_renders_and_leads_with_the_population(pool_report, tmp_path):
+    exe = _chromium()
+    shot = tmp_path / "pool.png"
+    r = _run(exe, f"--screenshot={shot}", f"--window-size={WINDOW[0]},{WINDOW[1]}",
+             pool_report.as_uri())
+    assert [ln for ln in r.stderr.splitlines() if ":CONSOLE" in ln] == []
+    from matplotlib.image import imread
+
+    img = imread(shot)
+    assert (img[..., :3] < 0.9).any(axis=-1).mean() > 0.02
+    update = os.environ.get("FOGBAYES_UPDATE_SCREENSHOTS") == "1"
+    _save_screenshot(shot, (DOC_SHOTS if update else tmp_path) / "pool.png")
+    dom = _run(exe, "--dump-dom", pool_report.as_uri()).stdout
+    sections = re.findall(r"<section[^>]*>", dom)
+    assert sections and 'id="headline"' in sections[0]
+    head = dom[dom.index(sections[0]):]
+    head = head[:head.index("</section>")]
+    assert "population median" in head and "a new unit (90 %)" in head
+    assert "Outside the population" in head and "FOG-002" in head  # the planted outlier
+    rows = re.findall(r"<tr><td>([NB])</td><td>[^<]*</td><td>([^<]+)</td><td>\[([^,]+), ([^\]]+)\]", head)
+    assert [r[0] for r in rows] == ["N", "B"]
+    for _, v, lo, hi in rows:  # every population median lies inside its interval
+        assert _number(lo)[0] <= _number(v)[0] <= _number(hi)[0]
+    assert len(re.findall(r'src="data:image/png;base64,', dom)) >= 1

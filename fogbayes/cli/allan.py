@@ -3,6 +3,8 @@
 Thin layer over :func:`fogbayes.workflow.allan.fit_recording`: loads the recording, writes
 the JSON document (canonical units: N deg/sqrt(h), B deg/h, K deg/h^1.5, R deg/h^2,
 Q arcsec and urad, whatever the input unit) and, with ``--plot``, the log-log figure.
+``--prior PRIOR.json`` (with ``--bayes``): a datasheet prior written by ``fogbayes prior``
+(:mod:`fogbayes.inference.datasheet`); the document records it under ``fit.prior``.
 """
 
 from __future__ import annotations
@@ -33,6 +35,14 @@ def summary_lines(doc: dict) -> list[str]:
         urad = (f"  = {e['value_urad']:.4g} urad" if "value_urad" in e else "")
         out.append(f"  {t} = {e['value']:.4g} [{e['low']:.4g}, {e['high']:.4g}] {e['unit']}"
                    f"{urad}{flag}")
+    prior = fit.get("prior")
+    if prior:
+        sheet = ", ".join(f"{t} {p['value']:.4g} {p['unit']} (90 % in "
+                          f"[{p['value'] / p['looseness']:.3g}, "
+                          f"{p['value'] * p['looseness']:.3g}])"
+                          for t, p in prior["terms"].items())
+        who = f" ({prior['sensor']})" if prior.get("sensor") else ""
+        out.append(f"  prior: datasheet{who}: {sheet}")
     return out
 
 
@@ -45,6 +55,9 @@ def allan(
     bayes: bool = typer.Option(False, "--bayes",
                                help="NumPyro posterior with term selection (slower)."),
     seed: int = typer.Option(0, help="Seed of the posterior sampler."),
+    prior: Path = typer.Option(None, "--prior",
+                               help="Datasheet prior (written by 'fogbayes prior'), with "
+                                    "--bayes: log-normal priors on the terms it gives."),
     plot: Path = typer.Option(None, "--plot", help="Also write the log-log ADEV figure (PNG/PDF)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
@@ -68,6 +81,8 @@ def allan(
           --json av.json
       fogbayes -q allan static.csv --json - > adev.json
       fogbayes allan flight.ulg --axis all --json adev.json --plot adev.png
+      fogbayes prior --arw 0.05 --bias-instability 0.5 --json sheet.json
+      fogbayes allan short.csv --bayes --prior sheet.json --json av.json
 
     With several axes (--axis all or x,z for a gyro log, --column gx,gy,gz for a table) the
     document holds one Allan document per axis under "axes" (docs/logs.md).
@@ -76,7 +91,18 @@ def allan(
     from ..data.atomic import atomic_path
     from ..workflow.allan import fit_recording
 
-    refuse_overwrite({"the recording": rec}, {"--json": json_out, "--plot": plot})
+    refuse_overwrite({"the recording": rec, "the --prior document": prior},
+                     {"--json": json_out, "--plot": plot})
+    sheet = None
+    if prior is not None:
+        if not bayes:
+            raise FogbayesError("--prior needs --bayes: the least-squares fit has no prior",
+                                column="--prior",
+                                fix="add --bayes (the datasheet prior enters the posterior), "
+                                    "or leave --prior out")
+        from ..inference.datasheet import read_prior
+
+        sheet = read_prior(prior)
     if taus not in _TAUS:
         raise FogbayesError(f"unknown tau grid '{taus}'", column="--taus",
                             fix=f"use one of {', '.join(_TAUS)}")
@@ -94,7 +120,7 @@ def allan(
     docs, doc = fit_channels(
         rec, axis, column, load_kw,
         lambda r: fit_recording(r, model="allan", bayes=bayes, seed=seed, taus=taus,
-                                per_decade=per_decade),
+                                per_decade=per_decade, prior=sheet),
         "Allan deviation and noise fit" + (" (posterior)" if bayes else ""))
     write_json(doc, json_out)
     for name, one in docs.items():

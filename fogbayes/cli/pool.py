@@ -56,6 +56,8 @@ def pool(
     flag_level: float = typer.Option(0.01, help="Flag a unit whose leave-one-out "
                                      "p-value against the population is below this."),
     seed: int = typer.Option(0, help="Seed of the sampler."),
+    prior: Path = typer.Option(None, "--prior", help="Datasheet prior (from 'fogbayes "
+                               "prior'): where the typical unit's terms lie, how loosely."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
@@ -72,6 +74,7 @@ def pool(
       fogbayes pool runs/ --json pool.json --report pool.html
       fogbayes pool imu1.npz imu2.npz imu3.npz --column gyro_x_dps,gyro_y_dps \\
           --output-unit deg/s --json pool.json
+      fogbayes pool runs/ --prior sheet.json --json pool.json
     """
     from ..errors import ArgumentError, about_file
     from ..models.allan import TERMS
@@ -90,8 +93,14 @@ def pool(
         raise ArgumentError(f"--flag-level is {flag_level:g}; it must lie in (0, 1)",
                             column="--flag-level", fix="e.g. --flag-level 0.01")
     files = recording_paths(paths)
-    refuse_overwrite({f"recording {i + 1}": p for i, p in enumerate(files)},
+    refuse_overwrite({**{f"recording {i + 1}": p for i, p in enumerate(files)},
+                      "the --prior document": prior},
                      {"--json": json_out, "--report": report})
+    sheet = None
+    if prior is not None:
+        from ..inference.datasheet import read_prior
+
+        sheet = read_prior(prior)
     if len(files) < 2:
         raise ArgumentError(f"a population needs at least two recordings, got {len(files)}",
                             column="PATHS", fix="name two or more runs or units")
@@ -109,7 +118,7 @@ def pool(
                 units.append(fit_unit(rec, name=unit_name))
         with progress("pooling" + ("" if name is None else f" {name}")):
             pools[name or column] = pool_allan(units, terms=chosen, seed=seed,
-                                               flag_level=flag_level)
+                                               flag_level=flag_level, prior=sheet)
     doc = pool_document(pools, model=model)
     write_json(doc, json_out)
     for name, p in pools.items():

@@ -17,7 +17,11 @@ record itself says about it ... priors"). The loop then bounds the walk by it:
 base fit's white block-mean variance, so the cap is on the absolute walk whatever share of
 the short-term noise the flicker bank takes). K_max is the upper end of the static run's
 interval for K -- for ``fogbayes allan --json`` documents ``fit.terms.K.high`` (90 %), an
-upper bound also where K is not supported -- or a datasheet value (``{"K": 0.02}``).
+upper bound also where K is not supported -- or a datasheet value (``{"K": 0.02}``). A
+datasheet prior document (``fogbayes prior``, schema ``fogbayes.prior/1``,
+:mod:`fogbayes.inference.datasheet`) gives K_max = value x looseness, the upper end of its
+90 % prior range for K (rate random walk); a sheet without RRW caps nothing and is refused,
+since a ``--noise-prior`` that silently bounds nothing would read as a bounded walk.
 
 A walk cap alone is escaped: a free Gauss-Markov component with a time constant near the
 record's length is a walk over the record, and ``markov_noise`` took a 0.5 deg/h warm-up
@@ -32,7 +36,7 @@ sigma and time constant tau_c has its largest ADEV, 0.618 sigma, at tau = 1.89 t
 lowers, so the cap errs loose; the loop's Markov time constants start at dt / 2, so
 their peaks lie at tau >= 0.95 dt, and the short-tau ADEV of white noise does not loosen the
 cap): a larger or slower component would have shown in the static run's ADEV. A bare
-``{"K": ...}`` leaves the Markov component free.
+``{"K": ...}`` and a datasheet prior (no ADEV curve) leave the Markov component free.
 
 The cap is a model assumption, not evidence: if the record's own walk is larger than the
 static run's (another sensor, another environment), the walk sits at the cap and the scans
@@ -51,7 +55,8 @@ from ..inference.noise_ssm import LOG_BOUNDS, NoiseSpec
 
 #: how to write a prior, for error messages
 HOW = ("write it with 'fogbayes allan STATIC.csv --json PRIOR.json' on a static run of the "
-       "same sensor, or give a datasheet value as {\"K\": 0.02} (deg/h^1.5)")
+       "same sensor, or 'fogbayes prior --rrw VALUE --rrw-unit UNIT --json PRIOR.json' from "
+       "the datasheet, or give a datasheet value as {\"K\": 0.02} (deg/h^1.5)")
 
 
 #: a Gauss-Markov process's ADEV peaks at GM_PEAK sigma, at tau = GM_PEAK_TAU tau_c
@@ -106,7 +111,8 @@ class NoisePrior(NamedTuple):
 
 
 def read_noise_prior(path: str | Path) -> NoisePrior:
-    """K_max from a ``fogbayes allan --json`` document or ``{"K": value}`` (see module doc)."""
+    """K_max from a ``fogbayes allan --json`` document, a datasheet prior document
+    (``fogbayes prior``) or ``{"K": value}`` (see module doc)."""
     path = Path(path)
     try:
         doc = json.loads(path.read_text())
@@ -132,7 +138,12 @@ def _number(value, key: str, source: str, what: str) -> float:
 
 def prior_from_doc(doc, *, source: str = "given") -> NoisePrior:
     """The prior in a parsed document: an Allan document (K's interval caps the walk, its
-    ADEV's upper band the Markov component) or a bare ``{"K": value}`` (the walk only)."""
+    ADEV's upper band the Markov component), a datasheet prior (K x looseness caps the walk)
+    or a bare ``{"K": value}`` (the walk only)."""
+    from ..inference.datasheet import is_prior_document
+
+    if is_prior_document(doc):
+        return _from_datasheet(doc, source)
     if isinstance(doc, dict) and "K" in doc and not isinstance(doc["K"], dict):
         return NoisePrior(_number(doc["K"], "K", source, "K in deg/h^1.5"), source=source)
     try:
@@ -149,3 +160,23 @@ def prior_from_doc(doc, *, source: str = "given") -> NoisePrior:
     return NoisePrior(k, tuple(_number(t, "tau", source, "tau in s") for t in tau),
                       tuple(_number(h, "adev_high", source, "ADEV in deg/h") for h in high),
                       source)
+
+
+def _from_datasheet(doc: dict, source: str) -> NoisePrior:
+    """K_max = value x looseness of the sheet's K (the top of its 90 % prior range)."""
+    from ..inference.datasheet import validate_prior
+
+    sheet = validate_prior(doc, source)
+    k = sheet.terms.get("K")
+    if k is None:
+        given = ", ".join(sheet.terms)
+        raise FogbayesError(
+            f"the datasheet prior gives no rate random walk (terms: {given}), so it sets no "
+            "cap on the walk", file=source, column="terms.K",
+            fix="add the sheet's RRW ('fogbayes prior ... --rrw VALUE --rrw-unit UNIT'), "
+                "or pass a static run's 'fogbayes allan --json' document, or leave "
+                "--noise-prior out")
+    who = f" {sheet.sensor}" if sheet.sensor else ""
+    return NoisePrior(k.value * k.looseness,
+                      source=f"{source} (datasheet{who}: K {k.value:.4g} deg/h^1.5 x "
+                             f"looseness {k.looseness:g})")

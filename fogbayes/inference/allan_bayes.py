@@ -20,6 +20,19 @@ resolve: a log-normal prior leaves a long flat tail towards 0 in log space that 
 slowly (effective sample sizes of ~100 in 2000 draws); the half-normal's density vanishes
 like :math:`\theta` there.
 
+Datasheet prior (``prior=``, :mod:`.datasheet`): each term the sheet gives gets the
+log-normal :math:`\log\theta_p \sim \mathcal N(\log v_p, s_p^2)`,
+:math:`s_p = \ln L_p / 1.645` (90 % of the prior within a factor :math:`L_p` of the sheet
+value :math:`v_p`); the other terms keep the half-normal. The objection above is to a weakly
+informative log-normal, whose scale must be wide enough to be harmless and which therefore
+leaves the flat tail to 0; an informative one has no such tail (its log density falls off
+quadratically below :math:`\log v_p`), so an unresolved term's posterior is the
+likelihood's upper bound times a proper, concentrated prior, which NUTS mixes well. The
+sheet's parameters are traced arguments of the one compiled sampler (``on``, ``mu``, ``sd``
+per term; all off without a sheet), so fits with and without a sheet, or with another
+sheet, reuse it. Terms on the sheet are kept in term selection: the sheet says they exist,
+and a record too short to resolve them is the case the prior is for.
+
 Model discrepancy: when the fit without it fails a goodness-of-fit check
 (:math:`z^\top C^{-1} z` at the posterior median beyond the 99.9 % point of
 :math:`\chi^2_K`) it is refitted with an independent log-normal discrepancy
@@ -77,15 +90,45 @@ def log_likelihood(logp, delta, mask, data: AllanFitData, obs):
     return total, pointwise
 
 
-def _potential_gen(obs, mask, data, *, discrepancy: bool):
+#: times the sampler was traced (a Python side effect runs only while JAX traces): a second
+#: datasheet, or none, with the same sizes and data shape leaves it as is
+TRACES = {"sampler": 0}
+
+
+def no_sheet() -> tuple:
+    """The sampler's datasheet arguments without a sheet: every term half-normal."""
+    return (jnp.zeros(5), jnp.zeros(5), jnp.ones(5))
+
+
+def sheet_args(prior) -> tuple:
+    """(on, mu, sd) of a :class:`~.datasheet.DatasheetPrior` (or None) as sampler arguments."""
+    if prior is None:
+        return no_sheet()
+    return tuple(jnp.asarray(a) for a in prior.arrays())
+
+
+def log_prior(logp, prior_loc, sheet):
+    """Log prior density of the log-parameters, per term (5,), Jacobian included.
+
+    Half-normal terms: log HalfNormal(e^logp; 3 e^prior_loc) + logp. Sheet terms (``on``):
+    log N(logp; mu, sd) -- the log-normal density of theta = e^logp times theta.
+    """
+    from jax.scipy.stats import norm
+
+    on, mu, sd = sheet
+    scale = PRIOR_SCALE * jnp.exp(jnp.asarray(prior_loc))
+    half = norm.logpdf(jnp.exp(logp), 0.0, scale) + jnp.log(2.0) + logp
+    return jnp.where(on > 0, norm.logpdf(logp, mu, sd), half)
+
+
+def _potential_gen(obs, mask, data, sheet, *, discrepancy: bool):
     """Negative log posterior in unconstrained space (``log_delta`` for the discrepancy)."""
     from jax.scipy.stats import norm
 
     def potential(z):
         logp = z["logp"]
-        # half-normal prior on each parameter, sampled as its log (+ the Jacobian log p)
-        scale = PRIOR_SCALE * jnp.exp(jnp.asarray(data.prior_loc))
-        lp = jnp.sum(norm.logpdf(jnp.exp(logp), 0.0, scale) + jnp.log(2.0) + logp)
+        # half-normal (or the sheet's log-normal) prior on each parameter, sampled as its log
+        lp = jnp.sum(log_prior(logp, data.prior_loc, sheet))
         delta = 0.0
         if discrepancy:  # HalfNormal(DELTA_SCALE) on delta, sampled as log delta
             delta = jnp.exp(z["log_delta"])
@@ -100,7 +143,8 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
     """Warmup + sampling of NUTS chains as one jitted, chain-vmapped function.
 
     Built with NumPyro's functional ``hmc`` API and compiled once per configuration and data
-    shape: the data are arguments, so fitting another record of the same length reuses it.
+    shape: the data and the datasheet prior are arguments, so fitting another record of the
+    same length, or with another sheet or none, reuses it.
     """
     from numpyro.infer.hmc import hmc
 
@@ -108,8 +152,9 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
         potential_fn_gen=functools.partial(_potential_gen, discrepancy=discrepancy),
         algo="NUTS")
 
-    def chain(key, z0, obs, mask, data):
-        args = (obs, mask, data)
+    def chain(key, z0, obs, mask, data, sheet):
+        TRACES["sampler"] += 1
+        args = (obs, mask, data, sheet)
         state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.9,
                             model_args=args, rng_key=key)
 
@@ -120,7 +165,7 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
         _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
         return jax.tree.map(lambda a: a[num_warmup:], zs), div[num_warmup:]
 
-    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None)))
+    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None, None)))
 
 
 class AllanPosterior(NamedTuple):
@@ -136,33 +181,46 @@ class AllanPosterior(NamedTuple):
 
 def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 1000,
               num_samples: int = 2000, num_chains: int = 2,
-              discrepancy: str | bool = "auto") -> AllanPosterior:
+              discrepancy: str | bool = "auto", prior=None) -> AllanPosterior:
     """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring.
+
+    ``prior``: a :class:`~.datasheet.DatasheetPrior` (or a prior document, or its path): a
+    log-normal prior on each term the sheet gives; None: half-normal priors throughout.
 
     Default sizes: with 400 warm-up / 600 draws only 25-55 % of five-term fits met R-hat <
     1.01 and ESS > 200 (the K-R ridge mixes slowly); 1000 / 2000 gave 95-100 % for ~35 %
     more time (20 seeds each of two mixes, benchmarks/RESULTS_allan.md section 3).
     """
+    from .datasheet import as_prior
+
+    prior = as_prior(prior)
     mask = _mask(terms)
     wls = fit_wls(data, terms)
     post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains,
-                discrepancy is True)
+                discrepancy is True, prior)
     if discrepancy == "auto" and post.diagnostics["gof_p"] < GOF_LEVEL:
-        post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains, True)
+        post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains,
+                    True, prior)
     return post
 
 
-def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discrepancy):
+def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discrepancy,
+         prior=None):
     from numpyro.diagnostics import summary
 
     init = np.clip(init_logp, data.prior_loc - 12.0, data.prior_loc + np.log(3 * PRIOR_SCALE))
+    sheet = sheet_args(prior)
+    if prior is not None:  # sheet terms start within 3 prior sd of the sheet value
+        given, mu, sd = (np.asarray(a) for a in sheet)
+        init = np.where(given > 0, np.clip(init_logp, mu - 3 * sd, mu + 3 * sd), init)
     rng = np.random.default_rng(seed)  # chains start at jittered copies of the GLS estimate
     z0 = {"logp": jnp.asarray(init + 0.01 * rng.standard_normal((num_chains, 5)))}
     if discrepancy:
         z0["log_delta"] = jnp.full(num_chains, np.log(0.01))
     obs, jmask = jnp.asarray(data.avar), jnp.asarray(mask)
     keys = jax.random.split(jax.random.PRNGKey(seed), num_chains)
-    zs, div = _sampler(num_warmup, num_samples, bool(discrepancy))(keys, z0, obs, jmask, data)
+    zs, div = _sampler(num_warmup, num_samples, bool(discrepancy))(keys, z0, obs, jmask, data,
+                                                                   sheet)
     samples = {"logp": zs["logp"]}
     logp = np.asarray(zs["logp"])  # (chains, draws, 5)
     delta = np.exp(np.asarray(zs["log_delta"])) if discrepancy else np.zeros(logp.shape[:2])
@@ -180,7 +238,10 @@ def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discr
     converged = bool(r_hat < 1.01 and ess > 200 and divergences == 0)
     diagnostics = {"r_hat_max": r_hat, "ess_min": ess, "divergences": divergences,
                    "gof_stat": gof[0], "gof_p": gof[1], "discrepancy": bool(discrepancy),
-                   "delta_median": float(np.median(delta)), "converged": converged}
+                   "delta_median": float(np.median(delta)), "converged": converged,
+                   "prior": "half-normal" if prior is None else
+                   "datasheet: log-normal on " + ", ".join(prior.terms) + ", half-normal on "
+                   "the others"}
     fit = AllanFit("bayes", _estimates(med, lo, hi, mask), AllanParams(*med), converged,
                    diagnostics)
     return AllanPosterior(fit, draws, log_lik, diagnostics, mask, data)
@@ -262,17 +323,24 @@ def _compare(post_a: AllanPosterior, post_b: AllanPosterior) -> dict:
             "pareto_k_max": float(max(np.max(loo_a.pareto_k), np.max(loo_b.pareto_k)))}
 
 
-def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, **kw) -> TermSelection:
+def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
+                 **kw) -> TermSelection:
     """Backward elimination by PSIS-LOO.
 
     From the model with all ``terms``: fit each model that lacks one candidate term, drop the
     term whose removal costs least if that cost ``elpd(with) - elpd(without)`` is below
     ELPD_THRESHOLD, and repeat from the reduced model. One term at a time matters: K and R
     can stand in for each other, so each alone looks unnecessary while one of them is needed.
-    Terms that are obviously present (OBVIOUS_SHARE) are not candidates.
+    Terms that are obviously present (OBVIOUS_SHARE) are not candidates, nor are the terms
+    a datasheet ``prior`` gives (the sheet says they exist; every fit uses the prior).
     """
     import warnings
 
+    from .datasheet import as_prior
+
+    prior = as_prior(prior)
+    kw["prior"] = prior
+    sheet_terms = () if prior is None else tuple(prior.terms)
     current = [t for t in TERMS if t in terms]
     post = fit_bayes(data, current, seed=seed, **kw)
     full, table = post, []
@@ -280,7 +348,8 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, **kw) -> TermSel
         warnings.simplefilter("ignore")  # Pareto-k / WAIC variance warnings: k is reported
         while True:
             obvious = _obvious(post)
-            cands = [t for t in current if not obvious[TERMS.index(t)]]
+            cands = [t for t in current
+                     if not obvious[TERMS.index(t)] and t not in sheet_terms]
             if not cands:
                 break
             trials = {t: fit_bayes(data, [u for u in current if u != t], seed=seed, **kw)

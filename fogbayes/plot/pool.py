@@ -43,7 +43,7 @@ def pool_figure(pool: dict, *, title: str = ""):
                     solid_capstyle="butt", label="pooled" if y == ypos[0] else None)
             ax.plot(pooled["value"], y - 0.18, "o", ms=3.5, color=c)
         ax.set_xscale("log")
-        ax.xaxis.set_major_locator(MaxNLocator(nbins=4))
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=3))
         ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:.3g}"))
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel(f"{TERM_NAMES.get(t, t)} [{med['unit']}]")

@@ -96,15 +96,28 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
 
 
 def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS,
-               seed: int = 0, flag_level: float = FLAG_LEVEL, **sampler) -> dict:
-    """Pool the units' five-term fits; a JSON-able document (module docstring)."""
-    from .normal import fit_pool
+               seed: int = 0, flag_level: float = FLAG_LEVEL, prior=None, **sampler) -> dict:
+    """Pool the units' five-term fits; a JSON-able document (module docstring).
+
+    ``prior``: a datasheet prior (:mod:`fogbayes.inference.datasheet`; document, path or
+    object): the population median of each pooled term the sheet gives is log-normal about
+    the sheet value within its looseness; the others keep the weak default."""
+    from ..inference.datasheet import as_prior
+    from .normal import MU_PRIOR_SD, fit_pool
 
     terms = tuple(t for t in TERMS if t in terms)
     idx = [TERMS.index(t) for t in terms]
     y = np.stack([u.logp[idx] for u in units])
     cov = np.stack([u.cov[np.ix_(idx, idx)] for u in units])
-    res = fit_pool(y, cov, terms, seed=seed, flag_level=flag_level, **sampler)
+    prior = as_prior(prior)
+    mu_prior, sheet = None, {}
+    if prior is not None:
+        sheet = {t: prior.terms[t] for t in terms if t in prior.terms}
+        mu_prior = (np.array([np.log(sheet[t].value) if t in sheet else np.median(y[:, j])
+                              for j, t in enumerate(terms)]),
+                    np.array([sheet[t].sd_log if t in sheet else MU_PRIOR_SD for t in terms]))
+    res = fit_pool(y, cov, terms, seed=seed, flag_level=flag_level, mu_prior=mu_prior,
+                   **sampler)
     population = {}
     for j, t in enumerate(terms):
         lo, hi = np.exp(np.quantile(res.new_unit[:, j], [0.5 - CI / 2, 0.5 + CI / 2]))
@@ -131,6 +144,10 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
             "population": population, "units": rows, "flagged": flagged,
             "warnings": check_units(units, terms), "diagnostics": diag,
             "converged": bool(diag["converged"]),
+            "prior": None if prior is None else {
+                **prior.record(), "rule": "log mu ~ N(log value, (ln looseness / 1.645)^2) "
+                "for the population median of " + (", ".join(sheet) or "no pooled term")
+                + "; the other pooled terms keep N(median of the units, 10^2)"},
             "method": "hierarchical normal model of the units' log-space GLS estimates "
                       "(fogbayes.pool.normal): NUTS on the population mean and spread, unit "
                       "parameters integrated out exactly and drawn given each posterior draw; "

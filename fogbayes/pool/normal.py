@@ -14,7 +14,10 @@ Each unit :math:`u = 1..U` (a sensor, or one run of a sensor) gives an estimate
 
 with :math:`\tilde y_p` the median of the units' estimates (the prior only fixes the scale:
 10 in log space is a factor :math:`e^{10}`; a spread of 1 in log space is a factor 2.7
-between units, so HalfNormal(1) admits anything a fleet of one type shows). The unit
+between units, so HalfNormal(1) admits anything a fleet of one type shows). A datasheet
+says where the typical unit lies: with ``mu_prior = (m, sd)`` the prior of :math:`\mu_p` is
+:math:`\mathcal N(m_p, sd_p^2)` instead (:mod:`fogbayes.inference.datasheet`: :math:`m_p`
+the log of the sheet value, :math:`sd_p = \ln L_p / 1.645` for looseness :math:`L_p`). The unit
 parameters integrate out exactly, :math:`y_u \sim \mathcal N(\mu, S + \Sigma_u)`, so NUTS
 samples only :math:`(\mu, \log s)`: :math:`2P` dimensions and no funnel between a unit and
 the spread. Given a draw of :math:`(\mu, S)` each unit's parameters are normal,
@@ -83,13 +86,13 @@ def _log_marginal(y, cov, w, mu, s):
     return jnp.sum(w * jax.vmap(one)(y, cov))
 
 
-def _potential(y, cov, w, centre):
+def _potential(y, cov, w, centre, mu_sd):
     from jax.scipy.stats import norm
 
     def potential(z):
         mu, log_s = z["mu"], z["log_s"]
         s = jnp.exp(log_s)
-        lp = jnp.sum(norm.logpdf(mu, centre, MU_PRIOR_SD))
+        lp = jnp.sum(norm.logpdf(mu, centre, mu_sd))
         # HalfNormal(1) on s, sampled as log s (+ the Jacobian log s)
         lp += jnp.sum(norm.logpdf(s, 0.0, SPREAD_PRIOR_SD) + jnp.log(2.0) + log_s)
         return -(lp + _log_marginal(y, cov, w, mu, s))
@@ -105,9 +108,9 @@ def _sampler(num_warmup: int, num_samples: int):
 
     init_kernel, sample_kernel = hmc(potential_fn_gen=_potential, algo="NUTS")
 
-    def chain(key, z0, y, cov, w, centre):
-        args = (y, cov, w, centre)
-        state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.95,
+    def chain(key, z0, y, cov, w, centre, mu_sd):
+        args = (y, cov, w, centre, mu_sd)
+        state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.98,
                             model_args=args, rng_key=key)
 
         def step(st, _):
@@ -117,7 +120,7 @@ def _sampler(num_warmup: int, num_samples: int):
         _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
         return jax.tree.map(lambda a: a[num_warmup:], zs), div[num_warmup:]
 
-    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None, None)))
+    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None, None, None)))
 
 
 def _start(y, cov, num_chains, rng):
@@ -154,11 +157,12 @@ def shrink(y, cov, mu, spread, rng) -> np.ndarray:
     return mean + np.einsum("duij,duj->dui", L, rng.standard_normal(mean.shape))
 
 
-def _run(y, cov, w, centre, z0, key, num_warmup, num_samples, num_chains):
+def _run(y, cov, w, centre, mu_sd, z0, key, num_warmup, num_samples, num_chains):
     """One posterior of (mu, s) with unit weights ``w``: draws (D, P) twice, diagnostics."""
     keys = jax.random.split(key, num_chains)
     zs, div = _sampler(num_warmup, num_samples)(keys, z0, jnp.asarray(y), jnp.asarray(cov),
-                                               jnp.asarray(w), jnp.asarray(centre))
+                                               jnp.asarray(w), jnp.asarray(centre),
+                                               jnp.asarray(mu_sd))
     zs = {k: np.asarray(v) for k, v in zs.items()}
     P = y.shape[1]
     return zs["mu"].reshape(-1, P), np.exp(zs["log_s"]).reshape(-1, P), _summary(zs, div)
@@ -194,10 +198,11 @@ PARETO_K_MAX = 0.7
 REFIT_FACTOR = 10.0
 
 
-def fit_pool(y, cov, names, *, seed: int = 0, flag_level: float = 0.01,
+def fit_pool(y, cov, names, *, seed: int = 0, flag_level: float = 0.01, mu_prior=None,
              num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 4) -> PoolResult:
     """Posterior of the population model (module docstring) from estimates ``y`` (U, P) with
     covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
+    ``mu_prior``: ``(mean (P,), sd (P,))`` of the normal prior on mu (a datasheet), or None.
 
     Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
     ArviZ); a unit whose Pareto k exceeds PARETO_K_MAX or whose p-value lies within
@@ -215,8 +220,12 @@ def fit_pool(y, cov, names, *, seed: int = 0, flag_level: float = 0.01,
         raise ValueError("a population needs at least two units")
     rng = np.random.default_rng(seed)
     centre, z0 = _start(y, cov, num_chains, rng)
+    mu_sd = np.full(P, MU_PRIOR_SD)
+    if mu_prior is not None:  # a datasheet: the typical unit's value and how loosely known
+        centre, mu_sd = (np.asarray(a, dtype=float) for a in mu_prior)
     key = jax.random.PRNGKey(seed)
-    run = functools.partial(_run, y, cov, centre=centre, z0=z0, num_warmup=num_warmup,
+    run = functools.partial(_run, y, cov, centre=centre, mu_sd=mu_sd, z0=z0,
+                            num_warmup=num_warmup,
                             num_samples=num_samples, num_chains=num_chains)
     mu, spread, diagnostics = run(np.ones(U), key=key)
     ll = unit_log_lik(y, cov, mu, spread)

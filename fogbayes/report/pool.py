@@ -47,6 +47,12 @@ def pool_sections(name: str | None, pool: dict) -> list[Section]:
               "last column's range with 90 % probability.")
     head.table(["term", "unit", "population median", "90 % interval", "between-unit spread",
                 "90 % interval", "a new unit (90 %)"], _population_rows(pool))
+    if pool.get("prior"):
+        pr = pool["prior"]
+        sheet = ", ".join(f"{t} {fmt(v['value'])} {unit_text(v['unit'])} (×/÷ {fmt(v['looseness'], sig=3)})"
+                          for t, v in pr["terms"].items() if t in pool["terms"])
+        head.text(f"Datasheet prior on the typical unit{' (' + pr['sensor'] + ')' if pr.get('sensor') else ''}: "
+                  f"{sheet or 'none of the pooled terms'}.")
     if pool["flagged"]:
         head.note(f"Outside the population (p < {pool['flag_level']:g}): "
                   f"{', '.join(pool['flagged'])}.", ok=False)

@@ -20,6 +20,11 @@ R deg/h^2. An Allan model describes random noise: ``compensate_recording`` refus
 Options (``**options``, e.g. ``fogbayes fit --option taus=dense``): ``taus`` (octave, decade,
 dense, all), ``per_decade`` (20), ``select`` (True: term selection with ``bayes``),
 ``num_warmup``/``num_samples``/``num_chains`` (sampler sizes).
+
+``prior`` (with ``bayes`` only): a datasheet prior (:mod:`fogbayes.inference.datasheet`:
+a ``DatasheetPrior``, a ``fogbayes.prior/1`` document or its path); the posterior uses a
+log-normal prior on each term the sheet gives, and the document records it under
+``fit.prior`` (values, units, looseness, the sheet's own numbers, source).
 """
 
 from __future__ import annotations
@@ -103,20 +108,24 @@ def _wls_doc(fit: AllanFit, data) -> dict:
                     "by < 2.71 (profile likelihood)"}})
 
 
-def _bayes_doc(data, seed: int, select: bool, sampler: dict) -> dict:
+def _bayes_doc(data, seed: int, select: bool, sampler: dict, prior=None) -> dict:
     from ..inference import allan_bayes as ab
 
     if select:
-        sel = ab.select_terms(data, seed=seed, **sampler)
+        sel = ab.select_terms(data, seed=seed, prior=prior, **sampler)
         post, rep = sel.selected, ab.reported_terms(sel)
         terms = {t: _term_doc(e, present) for t, (e, present) in rep.items()}
+        rule = f"drop a term when removing it costs < {ab.ELPD_THRESHOLD:g} elpd (PSIS-LOO)"
+        if prior is not None:
+            rule += "; terms the datasheet prior gives are kept"
         extra = {"selection": {"present": list(sel.present), "comparisons": sel.table,
-                               "rule": f"drop a term when removing it costs < "
-                                       f"{ab.ELPD_THRESHOLD:g} elpd (PSIS-LOO)"}}
+                               "rule": rule}}
     else:
-        post = ab.fit_bayes(data, seed=seed, **sampler)
+        post = ab.fit_bayes(data, seed=seed, prior=prior, **sampler)
         terms = {t: _term_doc(e) for t, e in post.fit.terms.items()}
         extra = {}
+    if prior is not None:
+        extra["prior"] = prior.record()
     lo, med, hi = ab.posterior_band(post, _curves(post.fit.params, data.tau[0],
                                                   data.tau[-1])["tau"], ci=CI)
     plo, phi = ab.predictive_band(post, ci=CI, seed=seed)
@@ -136,8 +145,17 @@ def _comparison(data, dev) -> dict:
 
 
 def fit_recording(rec, *, model: str = "allan", orders: str | None = None, bayes: bool = False,
-                  seed: int = 0, **options) -> dict:
-    """Allan deviation and five-term noise fit of ``rec`` as a JSON-able document."""
+                  seed: int = 0, prior=None, **options) -> dict:
+    """Allan deviation and five-term noise fit of ``rec`` as a JSON-able document
+    (``prior``: a datasheet prior for the posterior, ``bayes=True`` only; module doc)."""
+    if prior is not None:
+        from ..inference.datasheet import as_prior
+
+        if not bayes:
+            raise FogbayesError("a datasheet prior needs the posterior fit", column="prior",
+                                fix="fit with bayes=True (fogbayes allan --bayes --prior "
+                                    "PRIOR.json); the least-squares fit has no prior")
+        prior = as_prior(prior)
     if model not in MODELS:
         raise FogbayesError(f"the Allan workflow fits model 'allan', not '{model}'",
                             column="model", fix="use --model allan")
@@ -167,7 +185,7 @@ def fit_recording(rec, *, model: str = "allan", orders: str | None = None, bayes
     data, gls, left_out = fit_range(full)
     sampler = {k: int(options[k]) for k in ("num_warmup", "num_samples", "num_chains")
                if k in options}
-    fit = (_bayes_doc(data, seed, bool(options.get("select", True)), sampler) if bayes
+    fit = (_bayes_doc(data, seed, bool(options.get("select", True)), sampler, prior) if bayes
            else _wls_doc(gls, data))
     fit["range"] = {"tau_min": data.tau[0], "tau_max": data.tau[-1], "taus_left_out": left_out,
                     "rule": "shortest octave taus left out while the GLS goodness of fit has "
