@@ -44,7 +44,8 @@ def loop(
     noise_prior: Path = typer.Option(
         None, "--noise-prior",
         help="Cap the random walk by a static run: a 'fogbayes allan --json' document "
-             "(its K interval's upper end) or {\"K\": value} in deg/h^1.5."),
+             "(its K interval's upper end), a 'fogbayes prior' datasheet (K x looseness) "
+             "or {\"K\": value} in deg/h^1.5."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
