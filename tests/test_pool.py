@@ -92,6 +92,29 @@ def test_shrink_is_the_conjugate_normal_update():
     assert np.allclose(np.cov(d2[:, 0].T), S - S @ np.linalg.solve(S + c2[0], S), atol=0.003)
 
 
+@pytest.mark.parametrize("y, sig2, mu, sd", [(0.0, 0.3**2, 0.5, 0.4), (-2.0, 1.0, 0.0, 0.1),
+                                              (1.0, 0.05**2, -1.0, 2.0), (0.2, 0.5, 0.2, 1e-3)])
+def test_censored_likelihood_and_draws_against_quadrature(y, sig2, mu, sd):
+    """The flat-below likelihood of an unresolved term integrated against the population
+    normal: closed form vs numerical quadrature; shrink's rejection draws vs the mean of the
+    normalised product (quadrature)."""
+    from scipy import integrate, stats
+
+    from fogbayes.pool.normal import _censored_log_lik
+
+    lik = lambda t: 1.0 if t <= y else np.exp(-(t - y) ** 2 / (2 * sig2))  # noqa: E731
+    dens = lambda t: lik(t) * stats.norm.pdf(t, mu, sd)  # noqa: E731
+    lo, hi = mu - 12 * sd, mu + 12 * sd
+    ref = integrate.quad(dens, lo, hi, points=[y] if lo < y < hi else None, limit=200)[0]
+    assert np.isclose(float(np.exp(_censored_log_lik(y, sig2, mu, sd))), ref, rtol=1e-7)
+    mean = integrate.quad(lambda t: t * dens(t), lo, hi, points=[y] if lo < y < hi else None,
+                          limit=200)[0] / ref
+    D = 20_000
+    d = shrink(np.array([[y]]), np.array([[[sig2]]]), np.full((D, 1), mu), np.full((D, 1), sd),
+               np.random.default_rng(1), cens=np.ones((1, 1)))
+    assert abs(d[:, 0, 0].mean() - mean) < 5 * sd / np.sqrt(D) + 1e-3 * sd
+
+
 def test_a_far_unit_is_flagged_by_an_exact_refit_and_the_others_are_not():
     y, cov, _ = _fleet(8, [0.0, 1.0], [0.2, 0.3], [0.05, 0.2], seed=5)
     y[4, 1] += 3.0  # ~8 predictive sd away in the second parameter

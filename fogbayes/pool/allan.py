@@ -26,6 +26,7 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
+from ..inference.allan_fit import Z90
 from ..models.allan import TERMS, UNITS
 
 SCHEMA = "fogbayes.pool/1"
@@ -82,9 +83,9 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
         missing = [u.name for u in units if u.terms[t].low <= 0.0]
         if missing:
             out.append(f"{t} is not resolved in {len(missing)} of {len(units)} units "
-                       f"({', '.join(missing)}: their 90 % intervals reach 0): a one-sided "
-                       f"likelihood, which the pool's normal approximation overstates; "
-                       f"record longer or pool without {t} (--terms)")
+                       f"({', '.join(missing)}: their 90 % intervals reach 0): they enter as "
+                       f"upper limits (flat-below likelihood), which the population's {t} "
+                       f"rests on less; record longer to resolve it")
     failed = [u.name for u in units if not u.converged]
     if failed:
         out.append(f"the single-unit fit did not converge for {', '.join(failed)}")
@@ -109,6 +110,14 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
     idx = [TERMS.index(t) for t in terms]
     y = np.stack([u.logp[idx] for u in units])
     cov = np.stack([u.cov[np.ix_(idx, idx)] for u in units])
+    # a term a unit does not resolve is an upper limit: flat below its estimate, falling
+    # off above it over the width of its interval's upper side (fogbayes.pool.normal)
+    cens = np.array([[u.terms[t].low <= 0.0 for t in terms] for u in units], dtype=float)
+    for i, u in enumerate(units):
+        for j, t in enumerate(terms):
+            if cens[i, j]:
+                e = u.terms[t]
+                cov[i, j, j] = max(np.log(e.high / e.value) / Z90, 0.05) ** 2
     prior = as_prior(prior)
     mu_prior, sheet = None, {}
     if prior is not None:
@@ -116,8 +125,8 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
         mu_prior = (np.array([np.log(sheet[t].value) if t in sheet else np.median(y[:, j])
                               for j, t in enumerate(terms)]),
                     np.array([sheet[t].sd_log if t in sheet else MU_PRIOR_SD for t in terms]))
-    res = fit_pool(y, cov, terms, seed=seed, flag_level=flag_level, mu_prior=mu_prior,
-                   **sampler)
+    res = fit_pool(y, cov, terms, censored=cens, seed=seed, flag_level=flag_level,
+                   mu_prior=mu_prior, **sampler)
     population = {}
     for j, t in enumerate(terms):
         lo, hi = np.exp(np.quantile(res.new_unit[:, j], [0.5 - CI / 2, 0.5 + CI / 2]))
