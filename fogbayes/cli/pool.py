@@ -83,7 +83,7 @@ def pool(
     if model not in _MODELS:
         raise ArgumentError(f"cannot pool model '{model}'", column="--model",
                             fix=f"use one of {', '.join(_MODELS)}")
-    chosen = [t.strip() for t in terms.split(",") if t.strip()]
+    chosen = [t.strip().upper() for t in terms.split(",") if t.strip()]
     bad = [t for t in chosen if t not in TERMS]
     if bad or not chosen or len(set(chosen)) < len(chosen):
         raise ArgumentError(f"--terms {terms!r}: " + (f"'{bad[0]}' is not a noise term" if bad

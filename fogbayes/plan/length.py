@@ -130,7 +130,8 @@ def expected_data(params, fs: float, n: int, *, tau_min: float | None = None) ->
     as ``avar``, the model EDF as ``edf`` and the covariance tensors of its grid."""
     ms, counts = octave_grid(n, fs, tau_min)
     if not ms:
-        raise PlanError(f"{n} samples at {fs:g} Hz give no octave tau from {tau_min:g} s on",
+        raise PlanError(f"{n} samples at {fs:g} Hz give no octave tau from "
+                        f"{(1.0 / fs if tau_min is None else tau_min):g} s on",
                         fix="plan a longer record")
     tensors = _tensors(ms, counts)
     tau = np.array(ms, float) / fs

@@ -57,6 +57,14 @@ def fit_unit(rec, *, name: str | None = None) -> UnitFit:
     from ..workflow.allan import uniform_rate
 
     y, fs, _ = uniform_rate(rec)
+    finite = y[np.isfinite(y)]
+    if finite.size == 0 or np.ptp(finite) == 0:
+        from ..workflow.allan import AllanInputError
+
+        raise AllanInputError("the output is constant: its Allan variance is zero at every "
+                              "tau and there is no noise to pool", file=rec.meta.source,
+                              column="output", fix="check the column (a stuck or disconnected "
+                              "sensor?), or leave this recording out of the pool")
     data, fit, left_out = fit_range(prepare(y, fs))
     return UnitFit(name or rec.meta.sensor_id, rec.meta.source, int(y.size), fs,
                    np.asarray(fit.info["logp"]), np.asarray(fit.info["cov_log"]),

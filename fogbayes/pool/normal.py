@@ -39,7 +39,10 @@ its posterior-predictive p-value is
     p_u = \mathrm E_{\mu, S \mid y_{-u}}\Big[\Pr\big(\chi^2_P > (y_u - \mu)^\top
         (S + \Sigma_u)^{-1} (y_u - \mu)\big)\Big],
 
-uniform for a unit of the population; it is flagged when :math:`p_u` is below the flag level.
+uniform for a unit of the population, over its resolved components; each censored
+component (below) is judged one-sided, :math:`\Phi((y_{ut} - \mu_t)/\sqrt{s_t^2 +
+\sigma_{ut}^2})`, and the smallest of these p-values times their number (Bonferroni) is the
+unit's. It is flagged when :math:`p_u` is below the flag level.
 
 The normal likelihood of :math:`y_u` is the approximation this module makes: the GLS
 estimates of well-resolved Allan terms are close to normal in log space (their 90 %
@@ -55,9 +58,11 @@ interval reaches 0) is not: its likelihood is flat towards 0 and falls off above
 with :math:`y_{ut}` the unit's estimate and :math:`\sigma_{ut}` the width of its interval's
 upper side, independent of its other components; its integral against
 :math:`\mathcal N(\mu_t, s_t^2)` is closed-form (:func:`_censored_log_lik`). Treating such a
-unit as a normal measurement at its (low, arbitrary) estimate, or leaving it out, both bias
-the population: on simulated fleets the first put the population K 8 % high with 73 %
-coverage, because the units that did resolve K were those with the larger K.
+unit as a normal measurement at its (low, arbitrary) estimate put the population K 8 % high
+with 73 % coverage on simulated fleets (benchmarks/RESULTS_pool.md; 80 % with this
+likelihood). The width sigma comes from the interval's upper end, which may be the fit's
+99.9 % cap (:func:`fogbayes.inference.allan_fit.upper_caps`): the limit is then a little
+tighter than a 95 % one.
 """
 
 from __future__ import annotations
@@ -276,7 +281,10 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     cov = np.asarray(cov, dtype=float)
     U, P = y.shape
     if U < 2:
-        raise ValueError("a population needs at least two units")
+        from ..errors import ArgumentError
+
+        raise ArgumentError(f"a population needs at least two units, got {U}",
+                            fix="pool two or more runs or units")
     cens = np.zeros((U, P)) if censored is None else np.asarray(censored, dtype=float)
     r = 1.0 - cens
     cov = cov * r[:, :, None] * r[:, None, :] + np.eye(P) * (cens * np.diagonal(cov, axis1=1, axis2=2))[:, None, :]
