@@ -215,6 +215,19 @@ def test_cli_refuses_a_single_recording_and_an_empty_folder(tmp_path, capsys):
     assert "no recordings" in capsys.readouterr().err
 
 
+def test_cli_refuses_a_constant_unit_in_one_line(tmp_path, capsys):
+    from fogbayes import Recording, save
+    from fogbayes.cli import main
+    from fogbayes.data import Metadata
+
+    _write_units(tmp_path / "runs", 2, n=2**10)
+    save(Recording(time=np.arange(1024) / 10.0, output=np.full(1024, 3.0), unit="deg/h",
+                   meta=Metadata(sensor_id="stuck", sample_rate=10.0)), tmp_path / "runs" / "z.npz")
+    assert main(["pool", str(tmp_path / "runs"), "--json", str(tmp_path / "p.json")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "constant" in err[0] and "z.npz" in err[0]
+
+
 ADIS = Path(os.environ.get("FOGBAYES_SHARED", Path(__file__).resolve().parents[2] / "shared")) \
     / "data" / "measured" / "adis16405_static_ucalgary"
 
