@@ -146,26 +146,13 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
     shape: the data and the datasheet prior are arguments, so fitting another record of the
     same length, or with another sheet or none, reuses it.
     """
-    from numpyro.infer.hmc import hmc
+    from .nuts import chain_sampler
 
-    init_kernel, sample_kernel = hmc(
-        potential_fn_gen=functools.partial(_potential_gen, discrepancy=discrepancy),
-        algo="NUTS")
-
-    def chain(key, z0, obs, mask, data, sheet):
+    def traced():
         TRACES["sampler"] += 1
-        args = (obs, mask, data, sheet)
-        state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.9,
-                            model_args=args, rng_key=key)
 
-        def step(st, _):
-            st = sample_kernel(st, model_args=args)
-            return st, (st.z, st.diverging)
-
-        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
-        return jax.tree.map(lambda a: a[num_warmup:], zs), div[num_warmup:]
-
-    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None, None)))
+    return chain_sampler(functools.partial(_potential_gen, discrepancy=discrepancy),
+                         num_warmup, num_samples, target_accept_prob=0.9, on_trace=traced)
 
 
 class AllanPosterior(NamedTuple):

@@ -143,25 +143,11 @@ def _potential(y, cov, cens, w, centre, mu_sd):
 
 @functools.lru_cache(maxsize=8)
 def _sampler(num_warmup: int, num_samples: int):
-    """NUTS chains over (mu, log s), vmapped over chains; the unit weights are an argument,
-    so the full fit and every leave-one-out refit share one compilation per (U, P)."""
-    from numpyro.infer.hmc import hmc
+    """NUTS chains over (mu, log s) (:mod:`fogbayes.inference.nuts`); the unit weights are an
+    argument, so the full fit and every leave-one-out refit share one compilation per (U, P)."""
+    from ..inference.nuts import chain_sampler
 
-    init_kernel, sample_kernel = hmc(potential_fn_gen=_potential, algo="NUTS")
-
-    def chain(key, z0, y, cov, cens, w, centre, mu_sd):
-        args = (y, cov, cens, w, centre, mu_sd)
-        state = init_kernel(z0, num_warmup, dense_mass=True, target_accept_prob=0.98,
-                            model_args=args, rng_key=key)
-
-        def step(st, _):
-            st = sample_kernel(st, model_args=args)
-            return st, (st.z, st.diverging)
-
-        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
-        return jax.tree.map(lambda a: a[num_warmup:], zs), div[num_warmup:]
-
-    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None, None, None, None, None)))
+    return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=0.98)
 
 
 def _start(y, cov, num_chains, rng):
