@@ -29,7 +29,7 @@ CLOSED = {  # name -> closed form of the effect at its full parameters
     "temperature_rate": lambda c, p: fx.temperature_rate(c.dTdt, **p),
     "temperature_gradient": lambda c, p: fx.temperature_gradient(c.temperature,
                                                                  c.temperatures[:, 1], **p),
-    "thermal_hysteresis": lambda c, p: fx.thermal_hysteresis(c.dTdt, **p),
+    "thermal_hysteresis": lambda c, p: fx.thermal_hysteresis(c.dTdt, T=c.temperature, **p),
     "thermal_lag": lambda c, p: fx.thermal_lag(c.time, c.temperature, **p),
     "time_drift": lambda c, p: fx.time_drift(c.time, **p),
     "periodic": lambda c, p: fx.periodic(c.time, **p),
@@ -89,3 +89,15 @@ def test_run_events_and_sensor_properties():
     assert Term("drift_exp", {"tau": 60.0}).applies == "sensor"  # warm-up since power-on
     with pytest.raises(ValueError, match="unknown term kind"):
         Term("cosmic_ray", {}).n_cols
+
+
+def test_memory_hysteresis_equals_its_closed_form(cov):
+    """The play-operator (memory) shape of thermal_hysteresis: compiled kind vs the closed
+    form's plain loop; it holds its level through a soak, where tanh returns to zero."""
+    p = resolve("thermal_hysteresis", {"size": 0.6, "width": 3.0}, cov)
+    got = EFFECTS["thermal_hysteresis"].fn(cov, p)
+    want = fx.thermal_hysteresis(cov.dTdt, T=cov.temperature, **p)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert np.max(np.abs(want)) == pytest.approx(0.3, rel=1e-9)  # +-h/2 once saturated
+    soak = np.abs(cov.dTdt) < 1e-9
+    assert soak.any() and np.max(np.abs(want[soak])) > 0.25  # held through the soaks

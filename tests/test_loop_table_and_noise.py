@@ -43,10 +43,12 @@ def test_markov_noise_on_the_allan_model():
                                                                     tau_c=200.0)
     rec = Recording(time=np.arange(n) / fs, output=x, meta=Metadata(sample_rate=fs))
     res = run_loop(rec, "allan", seed=0, **RUN)
-    assert res.effects == ["markov_noise"]
-    d = res.steps[0].detail
+    assert res.effects == []  # noise is modelled, never a step
+    nm = res.to_json()["noise_model"]
+    assert len(nm["components"]) == 1 and nm["selection"][0]["action"] == "added"
+    d = nm["components"][0]
     # tau_c and sigma come back within a factor 2 (3 h hold ~50 correlation times)
     assert 100.0 < d["tau_c_s"] < 400.0 and 0.1 < d["sigma_deg_h"] < 0.4
-    assert d["adev_misfit_after"] < d["adev_misfit_before"]
+    assert nm["adev_misfit"]["with_components"] < nm["adev_misfit"]["five_term"]
 
 

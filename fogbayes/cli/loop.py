@@ -120,6 +120,11 @@ def loop(
         reason = "no further" + reason[len("no"):]
     say(f"{model}: added {added}; 10 s RMS {res.initial.rms:.4g} -> {res.final.rms:.4g} deg/h; "
         f"stopped: {reason}")
+    from ..loop.noise_model import sentence
+
+    say(sentence(res.fit, res.noise_selection).split(";")[0])
+    for r in (res.holdout or {}).get("not_kept", []):
+        say(f"not kept: {r['effect']} (supported, but held-out time blocks predicted worse)")
     for w in res.warnings:
         say(f"warning: {w}")
     if res.unexplained:  # structure no candidate names: say so where the user looks first

@@ -7,7 +7,8 @@ alternatives, so a likelihood ratio compares them)::
     temperature_order          next power of T'                    (no search)
     temperature_rate           dT/dt                                (no search)
     temperature_gradient       T_j - T_0 for each other channel j   (channel searched)
-    thermal_hysteresis         tanh(dT/dt / r0)                     (r0 searched, deg C/min)
+    thermal_hysteresis         tanh(dT/dt / r0), or the play        (r0 searched, deg C/min,
+                               operator's (T - P_w[T]) / (w/2)       or width w, deg C)
     thermal_lag                L_tau[T_0]                           (tau searched, s)
     time_drift                 t, or exp(-t / tau)                  (form and tau searched)
     step                       1[t >= time]                         (time searched)
@@ -115,12 +116,16 @@ def thermal_candidates(ctx: Context, terms) -> list[Candidate]:
             out.append(Candidate("temperature_gradient", "linear", tuple(grid),
                                  tuple(["temperature"] + [cov.names[t.params["b"]] for t in grid]),
                                  "channel" if len(grid) > 1 else None))
-    if moving and "hysteresis" not in kinds:
+    if moving and not kinds & {"hysteresis", "play"}:
+        # two shapes: rate-type (tanh, back to zero in a soak) and memory (play operator,
+        # held through a soak); widths from 0.5 deg C to a quarter of the range
         r0s = [r for r in (0.01, 0.02, 0.05, 0.1, 0.2, 0.5) if r < 0.5 * rate_scale]
-        if r0s:
-            out.append(Candidate("thermal_hysteresis", "linear", tuple(
-                Term("hysteresis", _e("thermal_hysteresis", r0=r)) for r in r0s),
-                ("dT/dt",), "r0"))
+        widths = [w for w in (0.5, 1.0, 2.0, 5.0, 10.0, 20.0) if w <= 0.25 * np.ptp(cov.T[:, 0])]
+        grid = [Term("hysteresis", _e("thermal_hysteresis", r0=r)) for r in r0s] + [
+            Term("play", _e("thermal_hysteresis", channel=0, width=w)) for w in widths]
+        if grid:
+            out.append(Candidate("thermal_hysteresis", "linear", tuple(grid), ("dT/dt",),
+                                 "r0" if not widths else "r0 or width"))
     if moving and "lag" not in kinds:
         lo, hi = max(60.0, 3 * ctx.grid.dt), 0.5 * cov.duration
         if hi > 2 * lo:

@@ -218,7 +218,7 @@ def screen_linear(wm: Whitened, cand: Candidate, Z: list[np.ndarray],
 
 
 def _searched_value(term: Term) -> float | None:
-    for key in ("tau", "time", "r0", "frequency"):
+    for key in ("tau", "time", "r0", "width", "frequency"):
         if key in term.params:
             return float(term.params[key])
     return None

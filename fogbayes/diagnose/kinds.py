@@ -12,6 +12,7 @@ or an effect the simulator plants -- is a :class:`~fogbayes.diagnose.terms.Term`
     rate_poly     ((dT/dt) / scale)^k                                (paper 004 rate terms)
     gradient      (T_b - T_a) / scale                                (two channels)
     hysteresis    tanh((dT/dt) / r0)                                 (+heating / -cooling)
+    play          (T_c - P_w[T_c]) / (w / 2), P_w the play operator     (memory hysteresis)
     lag           (L_tau[T_c] - centre) / scale, tau dL/dt = T - L   (first-order lag)
     drift_lin     t / duration                                       (run event)
     drift_exp     exp(-t / tau)                                      (warm-up since power-on)
@@ -35,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from .lag import first_order_lag
+from .play import play
 
 
 def _channel(cov, name) -> np.ndarray:
@@ -141,6 +143,20 @@ class Hysteresis(Kind):
 
     def describe(self, p, beta, se, t0):
         return {"r0_degC_per_min": p["r0"], "form": "(h/2) tanh(dT/dt / r0)",
+                "heating_minus_cooling_deg_h": _coef(beta[0], se[0], 2.0)}
+
+
+class Play(Kind):
+    name = "play"
+    needs = {"channel": "int", "width": "pos"}
+
+    def columns(self, p, cov):
+        T = _channel(cov, p["channel"])
+        return ((T - play(T, p["width"])) / (0.5 * p["width"]))[:, None]
+
+    def describe(self, p, beta, se, t0):
+        return {"width_degC": p["width"], "channel": p["channel"],
+                "form": "(h/2) (T - P_w[T]) / (w/2), P_w the play operator of width w",
                 "heating_minus_cooling_deg_h": _coef(beta[0], se[0], 2.0)}
 
 
@@ -264,7 +280,7 @@ class DriftTPoly(Kind):
 
 
 KINDS: dict[str, Kind] = {k.name: k() for k in (
-    Intercept, TPoly, Rate, RatePoly, Gradient, Hysteresis, Lag, DriftLin, DriftExp, Periodic,
+    Intercept, TPoly, Rate, RatePoly, Gradient, Hysteresis, Play, Lag, DriftLin, DriftExp, Periodic,
     Step, OmegaPoly, OmegaAbs, OmegaTPoly, DriftTPoly)}
 
 

@@ -43,7 +43,7 @@ from .terms import Term, columns
 #: sub-block positions per block tried by :func:`polish_step`
 STEP_SUBDIVISIONS = 20
 #: searched scale of each term kind that :func:`polish` re-scores after the decision
-SCALES = {"lag": "tau", "drift_exp": "tau", "hysteresis": "r0"}
+SCALES = {"lag": "tau", "drift_exp": "tau", "hysteresis": "r0", "play": "width"}
 #: times the scale grid is re-centred while its best value is at an edge
 RECENTRE_ROUNDS = 4
 #: most refits :func:`polish` makes while the scale keeps moving

@@ -33,10 +33,9 @@ class AdevMisfit(NamedTuple):
     adev_model: np.ndarray
 
 
-def _extra_avar(tau: np.ndarray, steps) -> np.ndarray:
+def _extra_avar(tau: np.ndarray, details) -> np.ndarray:
     out = np.zeros_like(tau)
-    for s in steps:
-        d = s.detail
+    for d in details:
         if d.get("term") == "gauss_markov_noise":
             out += np.asarray(markov_avar(tau, sigma=d["sigma_deg_h"], tau_c=d["tau_c_s"]))
         elif d.get("term") == "periodic":
@@ -45,8 +44,10 @@ def _extra_avar(tau: np.ndarray, steps) -> np.ndarray:
     return out
 
 
-def adev_misfit(rate: np.ndarray, fs: float, steps=(), *, tau_min: float = 0.0) -> AdevMisfit | None:
-    """Misfit of five-term + ``steps`` terms to the ADEV of ``rate`` (None if too short)."""
+def adev_misfit(rate: np.ndarray, fs: float, details=(), *,
+                tau_min: float = 0.0) -> AdevMisfit | None:
+    """Misfit of five-term + the terms ``details`` describe (Gauss-Markov components,
+    periodic steps' details) to the ADEV of ``rate`` (None if too short)."""
     try:
         a = allan_deviation(np.asarray(rate, float), fs, taus="octave")
     except ValueError:
@@ -58,7 +59,7 @@ def adev_misfit(rate: np.ndarray, fs: float, steps=(), *, tau_min: float = 0.0) 
         return None
     tau, var = tau[ok], var[ok]
     lo, hi = np.asarray(a.dev_low)[ok], np.asarray(a.dev_high)[ok]
-    extra = _extra_avar(tau, steps)
+    extra = _extra_avar(tau, details)
     A = np.column_stack([tau ** n for n in (-2, -1, 0, 1, 2)]) / var[:, None]
     coef, _ = nnls(A, np.maximum(var - extra, 0.0) / var)
     model = np.column_stack([tau ** n for n in (-2, -1, 0, 1, 2)]) @ coef + extra

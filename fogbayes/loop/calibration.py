@@ -41,6 +41,7 @@ from ..diagnose.covariates import block_grid, covariates_of
 from ..diagnose.terms import KINDS, Term, design, labels
 from ..units import convert_rate
 from .compensate import solve_rate
+from .noise_model import components
 
 
 #: Term kinds tied to the calibration run's clock (not carried to a new run by default).
@@ -99,6 +100,7 @@ def calibration_json(fit, ctx, model: str) -> dict[str, Any]:
                       "flicker_bank": bool(nf.spec.bank_taus),
                       "random_walk": bool(nf.spec.random_walk),
                       "gauss_markov_components": int(nf.spec.n_markov),
+                      "gauss_markov": components(fit),
                       "converged": bool(nf.converged)}}
 
 

@@ -1,6 +1,7 @@
 """The closed loop: fit -> diagnose -> weigh the shortlisted candidates -> add -> refit.
 
     fit the base model (GLS on block means, white + flicker + random-walk noise by ML)
+    choose its Gauss-Markov noise components (:mod:`.noise_model`: a noise model, not a step)
     repeat at most max_steps times:
         screen every candidate the model lacks (fixed noise, bootstrap-calibrated p)
         refit the n_refit best with their searched value refined and the noise re-estimated
@@ -10,6 +11,9 @@
         and add the winner, listing the indistinguishable ones as alternatives
         (an accepted step's time is then placed inside its block and a searched scale
         re-scored under the refit's noise, :func:`fogbayes.diagnose.refine.polish`)
+        and re-choose the noise components for the model with it; keep the term only if
+        the model with it predicts held-out folds of the record at least as well
+        (:mod:`.holdout`, time-blocked cross-validation), otherwise drop that candidate
     scan the final residual for structure no candidate names (``unexplained``)
 
 See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
@@ -25,16 +29,14 @@ import numpy as np
 from ..diagnose import elpd as el
 from ..diagnose.bartlett import bartlett_factor, in_walk_mode, leaves_walk_mode
 from ..diagnose import evidence as ev
-from ..diagnose.candidates import candidates_for
+from ..diagnose.candidates import EFFECTS, candidates_for
 from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
-from ..diagnose.markov import markov_log_p, refit_markov, screen_markov
 from ..diagnose.noise_prior import NoisePrior
 from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from ..inference import noise_ssm as ns
-from ..inference.noise_ssm import unpack
 from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, base_terms
@@ -43,6 +45,8 @@ from .identifiable import collinearity_warnings
 from .compensate import compensate
 from .describe import describe
 from .metrics import Metrics, block_rms, stability
+from . import holdout
+from .noise_model import best_with_fewer, choose as choose_noise, components
 from .ranking import alternatives, duel_json, rank_supported, supported_trials
 from .result import LoopResult, Rejected, Step
 
@@ -62,15 +66,20 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "(mean refitted ratio / dof over series simulated from the current fit, 20 at a time "
         "until the decision is the same at +-2 standard errors, at most 100), the walk "
         "variance piling up at zero when a slow term is offered); "
-        "markov_noise (a noise component) takes chi^2_2 for its refitted ratio (its measured "
-        "null). Supported candidates are ranked by the calibrated p-value of the refit, then "
+        "a candidate's refit may also drop one of the model's Gauss-Markov noise components "
+        "(the noise model is chosen apart from the effects, before the search and after each "
+        "added effect, by refitted ratios against chi^2_2). Supported candidates are ranked by the calibrated p-value of the refit, then "
         "the best meets every other supported linear candidate in a duel: D = 2 logL(other) - "
         "2 logL(best) at the REML noise of the model with both, each at the best value of "
         "its own (refined) grid, with a parametric-bootstrap p-value under each hypothesis "
         "(level 0.05); the "
         "one not rejected wins; if neither is rejected they are indistinguishable, the one "
         "with fewer searched parameters is kept and the other listed in 'alternatives'; "
-        "if both are, the higher likelihood. alpha = 0.01 by default. After the decision, "
+        "if both are, the higher likelihood. The winner is kept only if the model with it "
+        "predicts held-out time-blocked folds (10, each scored by its exact predictive "
+        "density given the other blocks, coefficients refitted without it) at least as well "
+        "as the model without it; otherwise it is set aside and the next step decides among "
+        "the others. alpha = 0.01 by default. After the decision, "
         "an accepted step's time is placed to 1/20 of a block (exact block columns, kept "
         "if the refitted likelihood rises).")
 
@@ -111,26 +120,24 @@ def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand:
     candidate's gate (``gate_log_p`` cleared): the refit itself chose that noise model.
     """
     c = 1.0
-    if s.candidate.kind == "noise":
-        alt = refit_markov(ctx, fit, s)
-        lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
-        lp = markov_log_p(lr)
-    else:
-        term, _ = refine(ctx, wm, s)
-        alt = fit_terms(ctx, fit.terms + (term,), spec=fit.noise.spec, theta0=fit.noise.theta)
-        lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
-        lp = ev.calibrated_log_p(ev.log_chi2_sf(lr, s.dof), s.m_eff)
-        if leaves_walk_mode(fit, alt):
-            if ev.fw_log_p(lp, n_cand) < math.log(alpha):
-                def log_p(c: float) -> float:
-                    return ev.calibrated_log_p(ev.log_chi2_sf(lr / c, s.dof), s.m_eff)
+    term, _ = refine(ctx, wm, s)
+    alt = fit_terms(ctx, fit.terms + (term,), spec=fit.noise.spec, theta0=fit.noise.theta)
+    fewer = best_with_fewer(ctx, alt)  # the candidate may stand for a noise component
+    if fewer is not None and fewer.loglik > alt.loglik:
+        alt = fewer
+    lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
+    lp = ev.calibrated_log_p(ev.log_chi2_sf(lr, s.dof), s.m_eff)
+    if leaves_walk_mode(fit, alt):
+        if ev.fw_log_p(lp, n_cand) < math.log(alpha):
+            def log_p(c: float) -> float:
+                return ev.calibrated_log_p(ev.log_chi2_sf(lr / c, s.dof), s.m_eff)
 
-                def passes(c: float) -> bool:
-                    return ev.fw_log_p(log_p(c), n_cand) < math.log(alpha)
+            def passes(c: float) -> bool:
+                return ev.fw_log_p(log_p(c), n_cand) < math.log(alpha)
 
-                c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed, decide=passes)
-                lp = log_p(c)
-            s = s._replace(gate_log_p=None)
+            c = bartlett_factor(ctx, fit, alt, s.dof, seed=seed, decide=passes)
+            lp = log_p(c)
+        s = s._replace(gate_log_p=None)
     return Trial(s, alt, lr, lp, ev.fw_log_p(lp, n_cand), c)
 
 
@@ -151,11 +158,10 @@ def _ranking(screened: list[ev.Screened], n_cand: int) -> list[dict]:
 
 
 def _evidence(tr: Trial, d: el.ElpdDiff | None, opts: Options, n_cand: int, trials, ranking):
-    noise = tr.screened.candidate.kind == "noise"  # chi^2_2, no grid calibration
     return {"rule": RULE, "alpha": opts.alpha, "n_candidates": n_cand,
             "likelihood_ratio": tr.lr, "bartlett_factor": tr.bartlett,
-            "dof": 2 if noise else tr.screened.dof,
-            "m_eff": 1.0 if noise else tr.screened.m_eff,
+            "dof": tr.screened.dof, "m_eff": tr.screened.m_eff,
+            "noise_components": len(components(tr.fit)),
             "log10_p": tr.log_p / math.log(10),
             "log10_p_familywise": tr.log_p_fw / math.log(10),
             "elpd_diff": None if d is None else d.diff, "elpd_diff_se": None if d is None else d.se,
@@ -207,16 +213,12 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
             else:
                 pairs[s2.candidate.effect] = (have[0]._replace(
                     log_p=have[0].log_p + math.log(2.0), gate_log_p=gate), have[1])
-    if any(c.kind == "noise" for c in cands):
-        sm = screen_markov(ctx, fit, wm)
-        if sm is not None:
-            pairs[sm.candidate.effect] = (sm, wm)
     return sorted(pairs.values(), key=lambda p: p[0].log_p)
 
 
 def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
     """Screen, refit the shortlist, apply the rule. Returns (accepted Trial | None, evidence)."""
-    cands = candidates_for(ctx, fit.terms, n_markov=fit.noise.spec.n_markov, effects=opts.effects)
+    cands = [c for c in candidates_for(ctx, fit.terms, effects=opts.effects) if c.kind != "noise"]
     if not cands:
         return None, None, {"reason": "no candidate left"}
     pairs = _screen_all(ctx, fit, cands, opts, step, cache)
@@ -225,10 +227,7 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
     if n_cand == 0:
         return None, None, {"reason": "no identifiable candidate"}
     ranking = _ranking(screened, n_cand)
-    # The fixed-noise screening understates a noise candidate (the current noise model has
-    # already bent towards it), so markov_noise is always refitted.
-    short = pairs[:opts.n_refit] + [p for p in pairs[opts.n_refit:]
-                                    if p[0].candidate.kind == "noise"]
+    short = pairs[:opts.n_refit]
     trials = sorted((t for t in (_safe_trial(ctx, fit, wm, s, n_cand, alpha=opts.alpha,
                                              seed=opts.seed + 7919 * step + 17)
                                  for s, wm in short) if t is not None), key=lambda t: t.log_p)
@@ -255,8 +254,10 @@ def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps
         orders: base-model orders (see :func:`fogbayes.loop.bases.parse_orders`).
         max_steps: add at most this many effects; alpha: family-wise level of each step.
         seed: seed of the bootstrap calibration and the ELPD draws; n_sims: simulated null
-            series per step; n_refit: candidates refitted per step (plus markov_noise).
-        effects: restrict the candidate names; target_blocks: block-grid size.
+            series per step; n_refit: candidates refitted per step.
+        effects: restrict the candidate names (``markov_noise`` in them, as by default:
+            choose Gauss-Markov noise components, :mod:`.noise_model`); target_blocks:
+            block-grid size.
         noise_prior: a cap on the random walk from a static run
             (:mod:`fogbayes.diagnose.noise_prior`), applied to every fit of the loop.
     """
@@ -276,11 +277,17 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     if noise_prior is not None:  # the cap is on the absolute walk: it needs the white level
         ctx = ctx._replace(spec=noise_prior.capped(ctx.spec, fit.noise.sigma2))
         fit = fit_terms(ctx, base)
+    markov = allowed is None or "markov_noise" in allowed
+    noise_rows: list[dict] = []
+    if markov:
+        fit, noise_rows = choose_noise(ctx, fit, alpha=alpha, seed=seed)
     fit0 = fit
     cache: dict = {}
     m0 = _metrics(ctx, fit, seed, cache)
     cur, steps = m0, []
     stop = Rejected("max_steps reached", {})
+    h_cur = holdout.score(ctx, fit)
+    h_base, held_out = h_cur, []
     for k in range(max_steps):
         tr, evid, why = _decide(ctx, fit, opts, k, cache)
         if tr is None:
@@ -288,59 +295,75 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
             break
         s = tr.screened
         new = polish(ctx, fit, tr.fit)  # a step's time, or a searched scale, under the refit
+        rows: list[dict] = []
+        if markov:
+            new, rows = choose_noise(ctx, new, alpha=alpha, seed=seed,
+                                     after=f"+ {s.candidate.effect}")
+        h_new = holdout.score(ctx, new)
+        cmp = holdout.compare(h_new, h_cur)
+        evid["holdout"] = holdout.to_json(cmp)
+        if not cmp.kept:  # supported in-sample, worse out of it
+            held_out.append({"effect": s.candidate.effect, **evid["holdout"]})
+            opts = opts._replace(effects=tuple(
+                e for e in (opts.effects or EFFECTS) if e != s.candidate.effect))
+            continue
+        noise_rows += rows
         m1 = _metrics(ctx, new, seed, cache)
-        term = new.terms[-1] if s.candidate.kind != "noise" else None
-        detail = _detail(new, term, rec, s)
+        term = new.terms[-1]
+        detail = _detail(new, term, rec)
         steps.append(Step(s.candidate.effect, s.candidate.covariates, term, detail, evid,
                           cur.rms, m1.rms, m1, new))
-        fit, cur = new, m1
+        fit, cur, h_cur = new, m1, h_new
     unexplained = scan_unexplained(ctx, fit, seed=seed, alpha=alpha)
+    noise_adev = None
     if model == "allan":
-        unexplained += _allan_story(rec, ctx, steps)
+        story, noise_adev = _allan_story(rec, ctx, steps, fit)
+        unexplained += story
     comp = compensate(rec, ctx, fit, model)
     return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE,
                       noise_prior, input_json(rec), calibration_json(fit, ctx, model),
-                      tuple(collinearity_warnings(ctx)))
+                      tuple(collinearity_warnings(ctx)), tuple(noise_rows), noise_adev,
+                      {"folds": holdout.N_FOLDS, "lpd_base": h_base.lpd, "lpd_final": h_cur.lpd,
+                       "not_kept": held_out})
 
 
-def _allan_story(rec, ctx: Context, steps: list[Step]) -> list[dict]:
-    """ADEV misfit before/after each step (in the steps' detail); unexplained if still > 3."""
+def _allan_story(rec, ctx: Context, steps: list[Step], fit: ModelFit):
+    """ADEV misfit of the five-term model with and without the final noise model's
+    Gauss-Markov components, then before/after each step (in the steps' detail) with them;
+    unexplained if still > 3. Returns (unexplained rows, the noise model's misfits)."""
     t = ctx.cov.t
     dt = float(np.median(np.diff(t)))
     if np.max(np.diff(t)) > 1.5 * dt:
-        return []  # gaps: the ADEV story needs uniform sampling
+        return [], None  # gaps: the ADEV story needs uniform sampling
     fs = 1.0 / dt
     tmin = ctx.grid.dt
-    before = adev_misfit(ctx.rate, fs, (), tau_min=tmin)
+    noise = components(fit)
+    five = adev_misfit(ctx.rate, fs, (), tau_min=tmin)
+    before = adev_misfit(ctx.rate, fs, noise, tau_min=tmin)
+    adev = None if five is None or before is None else {
+        "five_term": five.misfit, "with_components": before.misfit, "tau_min_s": tmin}
     for i, s in enumerate(steps):
-        after = adev_misfit(ctx.rate, fs, steps[:i + 1], tau_min=tmin)
+        after = adev_misfit(ctx.rate, fs, noise + [x.detail for x in steps[:i + 1]],
+                            tau_min=tmin)
         if before is not None and after is not None:
             s.detail["adev_misfit_before"] = before.misfit
             s.detail["adev_misfit_after"] = after.misfit
             s.detail["adev_misfit_dex_before"] = before.rms_dex
             s.detail["adev_misfit_dex_after"] = after.rms_dex
         before = after
-    if before is not None and before.misfit > 3.0:
-        z = np.abs(np.log(before.adev / before.adev_model))
-        k = int(np.argmax(z))
-        return [{"kind": "adev_misfit", "detail": {
-            "misfit": before.misfit, "rms_dex": before.rms_dex, "tau_min_s": tmin,
-            "worst_tau_s": float(before.tau[k]),
-            "adev_deg_h": float(before.adev[k]), "model_adev_deg_h": float(before.adev_model[k]),
-            "note": "five-term model plus the added terms misses the Allan deviation"}}]
-    return []
+    if before is None or before.misfit <= 3.0:
+        return [], adev
+    z = np.abs(np.log(before.adev / before.adev_model))
+    k = int(np.argmax(z))
+    return [{"kind": "adev_misfit", "detail": {
+        "misfit": before.misfit, "rms_dex": before.rms_dex, "tau_min_s": tmin,
+        "worst_tau_s": float(before.tau[k]),
+        "adev_deg_h": float(before.adev[k]), "model_adev_deg_h": float(before.adev_model[k]),
+        "note": "five-term model plus the noise components and added terms misses the "
+                "Allan deviation"}}], adev
 
 
-def _detail(fit: ModelFit, term, rec, s: ev.Screened) -> dict:
-    if term is None:  # a noise component: its variance and time constant
-        nf = fit.noise
-        p = unpack(nf.spec, nf.theta)
-        tau_c = float(np.exp(p.markov_logtau[-1]))
-        x = nf.spec.dt / tau_c  # block averaging keeps 2 (x - 1 + e^-x) / x^2 of the variance
-        keep = 2.0 * (x - 1.0 + np.exp(-x)) / x ** 2
-        return {"term": "gauss_markov_noise", "tau_c_s": tau_c,
-                "sigma_deg_h": float(np.sqrt(nf.sigma2 * np.exp(p.markov_logvar[-1]) / keep)),
-                "form": "first-order Gauss-Markov, stationary std sigma, correlation time tau_c"}
+def _detail(fit: ModelFit, term, rec) -> dict:
     p = fit.X.shape[1]
     k = term.n_cols
     beta = fit.beta[p - k:]

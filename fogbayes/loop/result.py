@@ -5,11 +5,14 @@
     {"schema": "fogbayes.loop/1", "model": ..., "initial": {"rms", "bias_stability", "elpd"},
      "steps": [{"effect", "covariates", "detail", "evidence", "rms_before", "rms_after"}],
      "final": {"rms", "bias_stability", "elpd"}, "unexplained": [{"kind", "detail"}],
+     "noise_model": {"components": [...], "selection": [...]},
      "input": {...}, "calibration": {...}}
 
 (rms and bias stability in deg/h, elpd in nats of the block-mean predictive density;
 ``input`` and ``calibration``: the final model as a calibration another run of the sensor
-can be compensated with, :mod:`fogbayes.loop.calibration`), plus
+can be compensated with, :mod:`fogbayes.loop.calibration`; ``noise_model``: the final
+model's Gauss-Markov noise components and every add/drop decision with its likelihood
+ratio, :mod:`fogbayes.loop.noise_model` -- noise is modelled, never a step), plus
 ``"noise_prior"`` when the loop ran under one (:mod:`fogbayes.diagnose.noise_prior`).
 """
 
@@ -25,6 +28,7 @@ from ..diagnose.fitting import ModelFit
 from ..diagnose.noise_prior import NoisePrior
 from ..diagnose.terms import Term
 from .metrics import Metrics
+from .noise_model import components
 
 
 class Step(NamedTuple):
@@ -66,6 +70,9 @@ class LoopResult(NamedTuple):
     input: dict | None = None          # unit, scale factor, channels of the recording
     calibration: dict | None = None    # the final model, applicable to new runs
     warnings: tuple = ()               # drivers the record cannot tell apart (identifiable)
+    noise_selection: tuple = ()        # Gauss-Markov add/drop decisions (noise_model.choose)
+    noise_adev: dict | None = None     # allan: ADEV misfit without/with the components
+    holdout: dict | None = None        # time-blocked CV: base and final lpd, terms not kept
 
     @property
     def effects(self) -> list[str]:
@@ -81,7 +88,13 @@ class LoopResult(NamedTuple):
         from ..data.doc_rules import LOOP_SCHEMA
 
         doc = {"schema": LOOP_SCHEMA, "model": self.model, "initial": m(self.initial),
-               "steps": steps, "final": m(self.final), "unexplained": self.unexplained}
+               "steps": steps, "final": m(self.final), "unexplained": self.unexplained,
+               "noise_model": {"components": components(self.fit),
+                               "selection": list(self.noise_selection)}}
+        if self.noise_adev is not None:
+            doc["noise_model"]["adev_misfit"] = self.noise_adev
+        if self.holdout is not None:
+            doc["holdout"] = self.holdout
         if self.noise_prior is not None:  # an assumption every number above depends on
             doc["noise_prior"] = self.noise_prior.to_json(self.context.grid.dt)
         if self.warnings:

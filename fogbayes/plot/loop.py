@@ -36,7 +36,7 @@ def driver(term, cov):
         return np.asarray(cov.t, float) / 3600.0, _DRIVER_LABELS[k]
     if k.startswith("omega") and cov.omega is not None:
         return np.asarray(cov.omega, float), _DRIVER_LABELS[k]
-    if k in ("tpoly", "lag") and "channel" in p:
+    if k in ("tpoly", "lag", "play") and "channel" in p:
         ch = p["channel"]
         j = ch if isinstance(ch, int) else list(cov.names).index(ch)
         name = cov.names[j] if j < len(cov.names) else "T"
@@ -66,35 +66,18 @@ def step_figure(res, i: int):
     tb, rb = _blocks(t, before.residual, out)
     fig, ax = new_figure(1, 2, figsize=(11, 3.4))
     ax[0].plot(tb / 3600, rb, ".", ms=2, color=COLORS["data"], label="residual before\n(10 s means)")
-    if s.term is not None:
-        # what the step changed in the model: the part of the old residual it explains
-        contrib = before.residual - s.fit.residual
-        tc, cb = _blocks(t, contrib, out)
-        ax[0].plot(tc / 3600, cb, color=model_color("loop"), label=f"model change:\n+ {s.effect}")
-        drv, dlabel = driver(s.term, ctx.cov)
-        _, db = _blocks(t, drv, out)
-        ax[1].plot(db, rb, ".", ms=2, color=COLORS["data"], label="residual before")
-        ax[1].plot(db, cb, ".", ms=2, color=model_color("loop"), label=f"+ {s.effect}")
-        ax[1].set_xlabel(dlabel)
-        ax[1].set_ylabel("10 s means [deg/h]")
-        ax[1].set_title("residual against the added term's driver")
-        ax[1].legend(**LEGEND_RIGHT)
-    else:  # a noise term: the Allan deviation it was needed for
-        from ..loop.adev_misfit import adev_misfit
-
-        fs = 1.0 / float(np.median(np.diff(t)))
-        a0 = adev_misfit(ctx.rate, fs, [x for x in res.steps[:i] if x.term is None or
-                                        x.effect == "periodic"], tau_min=ctx.grid.dt)
-        a1 = adev_misfit(ctx.rate, fs, [x for x in res.steps[:i + 1] if x.term is None or
-                                        x.effect == "periodic"], tau_min=ctx.grid.dt)
-        if a0 is not None and a1 is not None:
-            ax[1].loglog(a0.tau, a0.adev, "o", ms=3, color=COLORS["data"], label="ADEV")
-            ax[1].loglog(a0.tau, a0.adev_model, color=COLORS["data"], label="model before")
-            ax[1].loglog(a1.tau, a1.adev_model, color=model_color("loop"), label=f"+ {s.effect}")
-            ax[1].set_xlabel("averaging time tau [s]")
-            ax[1].set_ylabel("Allan deviation [deg/h]")
-            ax[1].legend(**LEGEND_RIGHT)
-        ax[1].set_title("Allan deviation: the misfit the noise term removes")
+    # what the step changed in the model: the part of the old residual it explains
+    contrib = before.residual - s.fit.residual
+    tc, cb = _blocks(t, contrib, out)
+    ax[0].plot(tc / 3600, cb, color=model_color("loop"), label=f"model change:\n+ {s.effect}")
+    drv, dlabel = driver(s.term, ctx.cov)
+    _, db = _blocks(t, drv, out)
+    ax[1].plot(db, rb, ".", ms=2, color=COLORS["data"], label="residual before")
+    ax[1].plot(db, cb, ".", ms=2, color=model_color("loop"), label=f"+ {s.effect}")
+    ax[1].set_xlabel(dlabel)
+    ax[1].set_ylabel("10 s means [deg/h]")
+    ax[1].set_title("residual against the added term's driver")
+    ax[1].legend(**LEGEND_RIGHT)
     ax[0].set_xlabel("time [h]")
     ax[0].set_ylabel("10 s means [deg/h]")
     ax[0].set_title(f"step {i + 1}: {s.effect}")
@@ -201,6 +184,7 @@ def loop_headline(res, rec=None):
 
 def loop_section(res):
     """A :class:`~fogbayes.report.html.Section` telling the loop's story."""
+    from ..loop.noise_model import sentence as noise_model_sentence
     from ..report.html import Cell, Section, fmt
 
     sec = Section("Closed loop")
@@ -239,6 +223,19 @@ def loop_section(res):
                                                      "means p = 0.01)")
         sec.figure(step_figure(res, i), caption=f"the residual that justified {s.effect}")
     sec.note(f"Stopped: {res.stop.reason}.", ok=True)
+    sec.text(noise_model_sentence(res.fit, res.noise_selection))
+    h = res.holdout or {}
+    for r in h.get("not_kept", []):
+        sec.note(f"Not kept: {r['effect']} was supported by the evidence but predicted "
+                 f"held-out time blocks worse (log predictive density {fmt(r['lpd'])} against "
+                 f"{fmt(r['lpd_before'])} nats without it, over the {r['folds_judging']} of "
+                 f"{r['folds']} folds that can judge it).", ok=False)
+    if h:
+        sec.text(f"Held-out check ({h['folds']} contiguous time folds, each predicted from the "
+                 f"others): log predictive density {fmt(h['lpd_base'])} nats for the base model, "
+                 f"{fmt(h['lpd_final'])} for the final one. The RMS and bias stability above "
+                 f"are of the output with the deterministic terms subtracted; the noise model "
+                 f"subtracts nothing.")
     if res.unexplained:
         def brief(u):
             items = [f"{k}={v}" for k, v in u["detail"].items()

@@ -32,13 +32,25 @@ def temperature_gradient(T1, T2, *, coeff: float):
     return coeff * (np.asarray(T2, dtype=float) - np.asarray(T1, dtype=float))
 
 
-def thermal_hysteresis(dTdt, *, size: float, rate_scale: float = 0.05):
+def thermal_hysteresis(dTdt, *, size: float, rate_scale: float = 0.05,
+                       width: float | None = None, T=None):
     """Heating vs cooling offset: b = (h/2) tanh(dT/dt / r0).
 
     +h/2 while heating, -h/2 while cooling, 0 at constant temperature, switching smoothly
     over |dT/dt| ~ r0 (deg C/min). So the bias-vs-T curve is h higher heating than cooling.
+
+    With ``width`` w (deg C) the memory form instead: b = (h/2) (T - P) / (w/2), P the play
+    operator (P follows T once T is w/2 past it; P_0 = T_0): +h/2 after heating, -h/2 after
+    cooling, held through a soak at the value the last ramp left.
     """
-    return 0.5 * size * np.tanh(np.asarray(dTdt, dtype=float) / rate_scale)
+    if width is None:
+        return 0.5 * size * np.tanh(np.asarray(dTdt, dtype=float) / rate_scale)
+    T = np.asarray(T, dtype=float)
+    h, P, y = 0.5 * width, np.empty_like(T), float(T[0])
+    for i, x in enumerate(T):
+        y = min(max(y, x - h), x + h)
+        P[i] = y
+    return 0.5 * size * (T - P) / h
 
 
 def thermal_lag(t, T, *, coeff: float, tau: float, T_ref: float = 0.0):

@@ -66,6 +66,12 @@ def _periodic(p: dict) -> Planted:
              [a * np.cos(ph), a * np.sin(ph)])]
 
 
+def _hysteresis(p: dict) -> Planted:  # rate-type (tanh) or, given a width, memory (play)
+    if p.get("width") is not None:
+        return [(Term("play", {"channel": 0, "width": p["width"]}), [0.5 * p["size"]])]
+    return [(Term("hysteresis", {"r0": p["rate_scale"]}), [0.5 * p["size"]])]
+
+
 def _drift(p: dict) -> Planted:  # s t / 3600 + A (1 - exp(-t / tau))
     return [(Term("drift_lin", {"duration": 3600.0}), [p["slope"]]),
             (Term("intercept", {}), [p["amplitude"]]),
@@ -102,9 +108,9 @@ EFFECTS: dict[str, EffectSpec] = {
         {"coeff": 0.03}, "k (T2 - T1) between the two channels (deg/h per deg C)",
         check=lambda c: _second(c, "temperature_gradient")),
     "thermal_hysteresis": _effect(
-        lambda p: [(Term("hysteresis", {"r0": p["rate_scale"]}), [0.5 * p["size"]])],
-        {"size": 0.2, "rate_scale": 0.05},
-        "(h/2) tanh(dT/dt / r0): bias h higher heating than cooling (deg/h)"),
+        _hysteresis, {"size": 0.2, "rate_scale": 0.05, "width": None},
+        "(h/2) tanh(dT/dt / r0): bias h higher heating than cooling (deg/h); with width w "
+        "(deg C) the memory form (h/2) (T - P_w[T]) / (w/2), P_w the play operator"),
     "thermal_lag": _effect(
         lambda p: [(Term("lag", {"channel": 0, "tau": p["tau"], "centre": p["T_ref"],
                                  "scale": 1.0}), [p["coeff"]])],

@@ -1,0 +1,38 @@
+"""The play (backlash) operator: a rate-independent hysteresis with memory.
+
+    P_k = min(max(P_{k-1}, u_k - h), u_k + h),  P_0 = u_0,  h = width / 2
+
+P follows u only once u has moved h past it, so after heating P = u - h, after cooling
+P = u + h, and through a soak P keeps the value the last ramp left: the bias of a sensor
+whose state depends on the direction it last came from (a memory hysteresis), unlike
+tanh(dT/dt / r0), which returns to zero in every soak. The loop's column is
+(u - P) / h: +1 after heating, -1 after cooling, the same sign as the rate-type term.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._numba import numba
+
+
+@numba.njit(cache=True)
+def _play(u: np.ndarray, h: float) -> np.ndarray:  # pragma: no cover - compiled
+    out = np.empty_like(u)
+    y = u[0]
+    for i in range(u.size):
+        x = u[i]
+        if y < x - h:
+            y = x - h
+        elif y > x + h:
+            y = x + h
+        out[i] = y
+    return out
+
+
+def play(u: np.ndarray, width: float) -> np.ndarray:
+    """P of ``u`` for a play of total ``width`` (module doc); width <= 0 returns ``u``."""
+    u = np.ascontiguousarray(u, dtype=float)
+    if width <= 0 or u.size == 0:
+        return u.copy()
+    return _play(u, 0.5 * float(width))
