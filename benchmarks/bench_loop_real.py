@@ -3,7 +3,10 @@
 Usage::
 
     python benchmarks/bench_loop_real.py [--workers 1] [--out benchmarks/loop_real.json]
-                                         [--runs 1,2,3] [--axes 0] [--only step,clean]
+                                         [--runs 1,...,6] [--axes 0,1,2] [--only step,clean]
+                                         [--scale 0.003]
+    python benchmarks/bench_loop_real.py --summary [--out ...]
+    python benchmarks/bench_loop_real.py --timing shupe_lag300
 
 Each record is the deterministic part of a simulated chamber test plus *measured* noise:
 
@@ -75,11 +78,14 @@ SHAPES = {
     "cubic": ("temperature_order", {"temperature_order": {
         "coeffs": QUADRATIC["coeffs"] + [2e-5], "T_ref": 20.0}}, {}),
 }
-def adis_noise(run: int, axis: int) -> np.ndarray:
-    """10 Hz block means of ADIS16405 run ``run`` gyro ``axis`` (deg/h), mean removed, x SCALE."""
+def adis_noise(run: int, axis: int, *, scale: float = SCALE, reverse: bool = False) -> np.ndarray:
+    """10 Hz block means of ADIS16405 run ``run`` gyro ``axis`` (deg/h), mean removed, x
+    ``scale``; ``reverse``: the same noise played backwards (another realisation of a
+    stationary process, with the same spectrum)."""
     d = np.load(os.path.join(ADIS, f"adis_16405_imu{run}.npz"))["data"][:, axis]
     x = d[: d.size // 10 * 10].reshape(-1, 10).mean(axis=1)
-    return SCALE * 3600.0 * (x - x.mean())
+    x = x[::-1] if reverse else x
+    return scale * 3600.0 * (x - x.mean())
 
 
 def build(case: dict):
@@ -99,7 +105,8 @@ def build(case: dict):
         effect_col = 2e-5 * (T - 20.0) ** 3
     else:
         effect_col = det - base_part if effects else None
-    noise = adis_noise(case["run"], case["axis"])[: rec.n]
+    noise = adis_noise(case["run"], case["axis"], scale=case.get("scale", SCALE),
+                       reverse=case.get("reverse", False))[: rec.n]
     out = Recording(time=rec.time, output=det + noise, unit="deg/h",
                     temperatures=rec.temperatures, temperature_names=rec.temperature_names,
                     meta=rec.meta)
@@ -157,7 +164,8 @@ def run_case(case: dict) -> dict:
                err_plain=_err(rec.time, plain_det, true_det, flag),
                err_oracle=_err(rec.time, orc_det, true_det, flag),
                err_base=_err(rec.time, base_det, true_det, flag),
-               rms_before=res.initial.rms, rms_after=res.final.rms,
+               rms_before=res.initial.rms, rms_after=res.final.rms, stop=res.stop.reason,
+               not_kept=[x["effect"] for x in (res.holdout or {}).get("not_kept", [])],
                oracle_lr=lr,
                oracle_log10_p_fw=float(ev.fw_log_p(min(ev.log_chi2_sf(lr, 1), 0.0), 9)
                                        / np.log(10)) if right else None)
@@ -165,14 +173,18 @@ def run_case(case: dict) -> dict:
     return row
 
 
-def cases(runs, axes, only=None) -> list[dict]:
+def cases(runs, axes, only=None, scale: float = SCALE) -> list[dict]:
+    """Every shape on axis ``axes[0]`` of each run; clean records on every axis, forwards
+    and backwards (the null needs more noise realisations than one per run)."""
     out = []
     for r in runs:
         for a in axes:
             for k, shape in enumerate(SHAPES):
-                if only and shape not in only:
+                if (only and shape not in only) or (shape != "clean" and a != axes[0]):
                     continue
-                out.append(dict(shape=shape, run=r, axis=a, seed=100 * r + 10 * a + k))
+                for rev in ((False, True) if shape == "clean" else (False,)):
+                    out.append(dict(shape=shape, run=r, axis=a, seed=100 * r + 10 * a + k,
+                                    reverse=rev, scale=scale))
     return out
 
 
@@ -195,7 +207,7 @@ def summarise(rows: list[dict]) -> str:
              "loop/plain | oracle log10 p_fw | wall s |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lp = r["oracle_log10_p_fw"]
-        lines.append(f"| {r['shape']} | {r['run']} | {r['axis']} | {', '.join(r['added']) or '-'} "
+        lines.append(f"| {r['shape']}{' (rev)' if r.get('reverse') else ''} | {r['run']} | {r['axis']} | {', '.join(r['added']) or '-'} "
                      f"| {r['err_loop']:.4f} | {r['err_plain']:.4f} | {r['err_oracle']:.4f} | "
                      f"{r['err_loop'] / r['err_oracle']:.2f} | {r['err_loop'] / r['err_plain']:.2f} "
                      f"| {'-' if lp is None else f'{lp:.1f}'} | {r['wall_s']:.0f} |")
@@ -253,9 +265,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--out", default=DEFAULT_OUT)
-    ap.add_argument("--runs", default="1,2,3")
-    ap.add_argument("--axes", default="0")
+    ap.add_argument("--runs", default="1,2,3,4,5,6")
+    ap.add_argument("--axes", default="0,1,2")
     ap.add_argument("--only", default=None)
+    ap.add_argument("--scale", type=float, default=SCALE, help="noise scale (module doc)")
     ap.add_argument("--summary", action="store_true", help="only summarise the rows in --out")
     ap.add_argument("--timing", default=None, metavar="SHAPE",
                     help="time `fogbayes loop` on a 6.3 h, 10 Hz record with SHAPE planted")
@@ -267,9 +280,10 @@ def main() -> None:
         print(summarise(json.load(open(a.out))))
         return
     todo = cases([int(x) for x in a.runs.split(",")], [int(x) for x in a.axes.split(",")],
-                 a.only.split(",") if a.only else None)
+                 a.only.split(",") if a.only else None, a.scale)
     done = json.load(open(a.out)) if os.path.exists(a.out) else []
-    key = lambda c: (c["shape"], c["run"], c["axis"], c["seed"])
+    key = lambda c: (c["shape"], c["run"], c["axis"], c["seed"], c.get("reverse", False),
+                     c.get("scale", SCALE))
     seen = {key(r) for r in done}
     todo = [c for c in todo if key(c) not in seen]
     print(f"{len(todo)} records to run ({len(done)} done)", flush=True)
@@ -277,7 +291,7 @@ def main() -> None:
         for r in pool.map(run_case, todo):
             done.append(r)
             json.dump(done, open(a.out, "w"), indent=1, default=float)
-            print(r["shape"], r["run"], r["axis"], "->", r["added"],
+            print(r["shape"], r["run"], r["axis"], r.get("reverse"), "->", r["added"],
                   f"loop/oracle {r['err_loop'] / r['err_oracle']:.2f}",
                   f"loop/plain {r['err_loop'] / r['err_plain']:.2f}", f"{r['wall_s']:.0f}s",
                   flush=True)

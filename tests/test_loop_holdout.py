@@ -76,3 +76,20 @@ def test_loop_document_reports_the_noise_model_and_the_holdout():
     assert isinstance(doc["noise_model"]["components"], list)
     assert doc["calibration"]["noise"]["gauss_markov_components"] == len(
         doc["noise_model"]["components"])
+
+
+def test_a_fold_holding_all_of_a_warm_up_does_not_judge_it():
+    """A 300 s warm-up lives in the first of ten 1080 s folds: without that fold its
+    amplitude is unidentified (e^-1080/300 ~ 3 % left), so that fold cannot judge it and is
+    left out of the comparison; the other nine do."""
+    tr = make_record("time_drift", seed=5, duration=3 * 3600.0, fs=2.0,
+                     effect_params={"amplitude": 2.0, "tau": 300.0})
+    ctx = make_context(tr.recording, target_blocks=900)
+    base = base_terms(ctx, "bias-t")
+    h0 = holdout.score(ctx, fit_terms(ctx, base))
+    h1 = holdout.score(ctx, fit_terms(ctx, base + [Term("drift_exp", {"tau": 300.0})]))
+    new = h1.info[:, -1]
+    assert new[0] < holdout.MIN_INFORMATION <= new[1:].min()
+    c = holdout.compare(h1, h0)
+    assert c.folds == holdout.N_FOLDS - 1
+    assert c.lpd_before == pytest.approx(h0.per_fold[1:].sum())

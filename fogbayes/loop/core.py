@@ -320,11 +320,33 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         story, noise_adev = _allan_story(rec, ctx, steps, fit)
         unexplained += story
     comp = compensate(rec, ctx, fit, model)
+    held = {"folds": holdout.N_FOLDS, "lpd_base": h_base.lpd, "lpd_final": h_cur.lpd,
+            "not_kept": held_out, **_plain_check(ctx, model, fit, h_cur)}
+    warnings = tuple(collinearity_warnings(ctx))
+    if held.get("final_not_worse_than_plain_fit") is False:
+        warnings += (f"the final model predicts held-out time blocks worse than "
+                     f"{held['plain_fit']} (log predictive density {h_cur.lpd:.1f} vs "
+                     f"{held['lpd_plain_fit']:.1f}): compare with that fit before using it",)
     return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE,
                       noise_prior, input_json(rec), calibration_json(fit, ctx, model),
-                      tuple(collinearity_warnings(ctx)), tuple(noise_rows), noise_adev,
-                      {"folds": holdout.N_FOLDS, "lpd_base": h_base.lpd, "lpd_final": h_cur.lpd,
-                       "not_kept": held_out})
+                      warnings, tuple(noise_rows), noise_adev, held)
+
+
+#: base orders of ``fogbayes fit`` (:mod:`fogbayes.workflow.thermal`), for the plain-fit check
+PLAIN_ORDERS = {"bias-t": "3", "thermal": "2"}
+
+
+def _plain_check(ctx: Context, model: str, fit: ModelFit, h_final) -> dict:
+    """The plain fit's terms by least squares, scored by the same held-out folds under the
+    final noise model: the loop's output should not predict worse than what the user would
+    otherwise run."""
+    if model not in PLAIN_ORDERS:
+        return {}
+    terms = tuple(base_terms(ctx, model, PLAIN_ORDERS[model]))
+    plain = ModelFit(terms, ctx.block_design(list(terms)), fit.noise, np.zeros(0))
+    h = holdout.score(ctx, plain, ols=True)
+    return {"plain_fit": f"fogbayes fit -m {model} (orders {PLAIN_ORDERS[model]}, least squares)",
+            "lpd_plain_fit": h.lpd, "final_not_worse_than_plain_fit": bool(h_final.lpd >= h.lpd)}
 
 
 def _allan_story(rec, ctx: Context, steps: list[Step], fit: ModelFit):

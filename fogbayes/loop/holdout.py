@@ -65,8 +65,10 @@ def _loglik(V: np.ndarray, F: np.ndarray, beta: np.ndarray, s2: float, m: np.nda
     return float(-0.5 * np.sum(np.log(2.0 * math.pi * f) + r * r / f))
 
 
-def score(ctx: Context, fit: ModelFit, k: int = N_FOLDS) -> Holdout:
-    """The held-out predictive density of ``fit`` (module doc)."""
+def score(ctx: Context, fit: ModelFit, k: int = N_FOLDS, *, ols: bool = False) -> Holdout:
+    """The held-out predictive density of ``fit`` (module doc); ``ols``: the coefficients of
+    each fold by least squares (weights 1 / w) instead of GLS -- the plain ``fogbayes fit``'s
+    estimator -- scored under ``fit``'s noise model all the same."""
     spec, theta, s2 = fit.noise.spec, fit.noise.theta, float(fit.noise.sigma2)
     mask, w = np.asarray(ctx.grid.mask, float), ctx.grid.w
     Y = np.column_stack([np.where(mask > 0, ctx.y, 0.0), fit.X])
@@ -84,6 +86,9 @@ def score(ctx: Context, fit: ModelFit, k: int = N_FOLDS) -> Holdout:
         V, F = ns.filter_padded(spec, theta, Y, train, w)
         _, beta, cov, s2_tr = ns.profile_np(V, F, train)
         info[j] = var_all / np.maximum(np.diag(cov) / s2_tr, 1e-300)
+        if ols:
+            sw = np.sqrt(train / np.asarray(w, float))
+            beta = np.linalg.lstsq(fit.X * sw[:, None], Y[:, 0] * sw, rcond=None)[0]
         per[j] = (_loglik(V_all, F_all, beta, s2, mask > 0)
                   - _loglik(V, F, beta, s2, train > 0))
     return Holdout(float(per.sum()), per, int((mask > 0).sum()), info)
