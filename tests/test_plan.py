@@ -144,6 +144,9 @@ def test_cli_plan_prints_and_writes_json(pilot_file, tmp_path, capsys):
     (["--term", "N", "--precision", "0"], "--precision"),
     (["--term", "X", "--precision", "0.1"], "--term"),
     (["--term", "N", "--precision", "0.1", "--level", "90"], "--level"),
+    # K alone would absorb the white noise (goodness-of-fit p ~ 1e-300): refused, not planned
+    (["--term", "N", "--terms", "K", "--precision", "0.1"], "include --term N"),
+    (["--term", "K", "--terms", "K", "--precision", "0.1"], "not described by the terms K"),
 ])
 def test_cli_plan_bad_input_exits_2_in_one_line(pilot_file, capsys, args, needle):
     assert main(["plan", str(pilot_file), *args]) == 2

@@ -261,3 +261,24 @@ def test_six_adis16405_runs_pool_beside_the_random_effects_estimate(tmp_path):
     med = pool["population"]["N"]["median"]
     assert abs(np.log(med["value"]) - m_dl) < 2 * se_dl
     assert pool["population"]["N"]["spread"]["log_sd"]["low"] > 0.3 * np.sqrt(tau2)
+
+
+def test_unit_names_stay_apart_across_folders_and_a_file_named_twice_is_refused(tmp_path):
+    """a/imu.npz and b/imu.npz are two units (named by their paths below the shared
+    folder); the same file given twice would count one unit twice and is refused."""
+    from types import SimpleNamespace
+
+    from fogbayes.cli.pool import _names, recording_paths
+    from fogbayes.errors import FileFormatError
+
+    paths = []
+    for d in ("a", "b"):
+        (tmp_path / d).mkdir()
+        f = tmp_path / d / "imu.npz"
+        f.write_bytes(b"")
+        paths.append(f)
+    recs = [SimpleNamespace(meta=SimpleNamespace(sensor_id=None))] * 2
+    assert _names(recs, paths) == [str(Path("a") / "imu.npz"), str(Path("b") / "imu.npz")]
+    assert recording_paths([tmp_path / "a", tmp_path / "b"]) == paths
+    with pytest.raises(FileFormatError, match="named twice"):
+        recording_paths([paths[0], tmp_path / "a"])

@@ -35,13 +35,29 @@ def recording_paths(paths: list[Path]) -> list[Path]:
             out.append(p)
         else:
             raise FileFormatError("file not found", file=str(p), fix="check the path")
+    seen: dict[Path, Path] = {}
+    for p in out:
+        if p.resolve() in seen:  # one unit counted twice would halve the spread
+            raise FileFormatError(f"named twice (also as {seen[p.resolve()]})", file=str(p),
+                                  fix="name each recording once")
+        seen[p.resolve()] = p
     return out
 
 
 def _names(recs, paths) -> list[str]:
-    """Unit names: the sensor ids, or the file names where ids repeat."""
+    """Unit names: the sensor ids; where ids repeat, the file names; where those repeat too
+    (``a/imu.npz``, ``b/imu.npz``), the paths below the folder they share."""
+    import os
+
     ids = [r.meta.sensor_id for r in recs]
-    return ids if len(set(ids)) == len(ids) else [p.name for p in paths]
+    if len(set(ids)) == len(ids):
+        return ids
+    names = [p.name for p in paths]
+    if len(set(names)) == len(names):
+        return names
+    full = [p.resolve() for p in paths]
+    common = Path(os.path.commonpath(full))
+    return [str(f.relative_to(common)) for f in full]
 
 
 @app.command()

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import math
+
 import numpy as np
 from scipy import optimize, special
 
@@ -39,7 +41,7 @@ from .allan_data import AllanFitData, log_moments, model_moments, restrict
 Z90 = float(special.ndtri(0.95))
 CHI2_90 = float(chi2_ppf(0.9, 1))
 GOF_LEVEL = 1e-3
-_PENALTY_SD = 10.0
+PENALTY_SD = 10.0
 _STEPS = 200
 
 
@@ -99,8 +101,10 @@ _A = np.array([_A_PER_P2[t] for t in TERMS])
 
 
 def _log_model(logp, mask, tau):
-    """log sigma^2(tau) of the five-term model at log-parameters ``logp`` (terms in ``mask``)."""
-    return np.log(_term_parts(logp, mask, tau).sum(axis=0))
+    """log sigma^2(tau) of the five-term model at log-parameters ``logp`` (terms in ``mask``);
+    -inf for a model with no term (the chi-square "without" the only term is then inf)."""
+    with np.errstate(divide="ignore"):
+        return np.log(_term_parts(logp, mask, tau).sum(axis=0))
 
 
 def _term_parts(logp, mask, tau):
@@ -136,11 +140,11 @@ def _minimise(logp0, mask, tau, target, prec, loc):
     def resid(v):
         lp = full(v)
         return np.concatenate([W @ (target - _log_model(lp, mask, tau)),
-                               (v - loc[on]) / _PENALTY_SD])
+                               (v - loc[on]) / PENALTY_SD])
 
     def jac(v):
         J = _log_model_jacobian(full(v), mask, tau)[:, on]
-        return np.vstack([-W @ J, np.eye(int(on.sum())) / _PENALTY_SD])
+        return np.vstack([-W @ J, np.eye(int(on.sum())) / PENALTY_SD])
 
     if not on.any():
         return x, 0.0, 0.0
@@ -199,7 +203,7 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     J = _log_model_jacobian(logp, mask, tau)
     on = mask > 0
     Jm = J[:, on]
-    info_mat = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / _PENALTY_SD**2
+    info_mat = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / PENALTY_SD**2
     cov = np.zeros((5, 5))
     cov[np.ix_(on, on)] = np.linalg.inv(info_mat)
     se = np.sqrt(np.diag(cov))
@@ -232,7 +236,10 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
 
 
 def _chi2(logp, mask, tau, target, prec) -> float:
-    r = np.asarray(target) - _log_model(logp, mask, tau)
+    model = _log_model(logp, mask, tau)
+    if not np.all(np.isfinite(model)):  # no term left: nothing is fitted
+        return math.inf
+    r = np.asarray(target) - model
     return float(r @ prec @ r)
 
 

@@ -60,7 +60,7 @@ from scipy import special
 
 from ..errors import FogbayesError
 from ..inference.allan_data import MIN_TAUS, AllanFitData, log_moments, model_moments
-from ..inference.allan_fit import _PENALTY_SD  # the fit's own weak penalty: same se
+from ..inference.allan_fit import PENALTY_SD  # the fit's own weak penalty: same se
 from ..models.allan import TERMS, UNITS, AllanParams, avar, term_avar
 from ..stats.allan_cov import CovTensors, covariance_tensors
 from ..stats.allan_stencils import static_counts
@@ -173,7 +173,7 @@ def log_cov(params, data: AllanFitData, terms=None) -> tuple[tuple, np.ndarray]:
     J = (2.0 * parts / parts.sum(axis=0)).T  # d log sigma^2 / d log p
     on = mask > 0
     Jm = J[:, on]
-    info = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / _PENALTY_SD**2
+    info = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / PENALTY_SD**2
     return tuple(t for t in TERMS if t in terms), np.linalg.inv(info)
 
 

@@ -74,6 +74,11 @@ class PilotPlan(NamedTuple):
         return self.range.hours
 
 
+#: goodness-of-fit p below which the pilot's model is refused (far below the fit's own
+#: GOF_LEVEL 1e-3, where it only widens its errors: a model this wrong has no errors to widen)
+MISFIT_P = 1e-6
+
+
 def pilot_model(data, terms=TERMS) -> tuple[AllanFit, tuple, tuple]:
     """Backward elimination of unresolved terms (module docstring, step 2).
 
@@ -106,6 +111,12 @@ def plan_from_pilot(rate_deg_h, fs: float, term: str, precision: float, *,
     data, _, left_out = fit_range(full, terms)
     fit, model, dropped = pilot_model(data, terms)
     hours = full.n / fs / 3600.0
+    if fit.info["gof_p"] < MISFIT_P:  # e.g. --terms K on a white-noise pilot: K = white
+        raise PlanError(
+            f"the pilot's Allan variance is not described by the terms {', '.join(model)} "
+            f"(goodness-of-fit p = {fit.info['gof_p']:.2g}): a plan from that model would be "
+            "wrong", column="terms",
+            fix=f"let the pilot's fit choose among more terms (e.g. --terms {','.join(TERMS)})")
     if term not in model:
         est = fit_wls(data, tuple(model) + (term,)).terms[term] if term in terms else None
         seen = "" if est is None else (f" ({term} = {est.value:.3g} [{est.low:.3g}, "
