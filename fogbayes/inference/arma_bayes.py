@@ -101,11 +101,10 @@ def _sampler(num_warmup: int, num_samples: int):
     time (~5 s a call; its own jit cache lives on the MCMC object). Here NumPyro's
     functional API runs the same steps as ``MCMC.run`` with ``chain_method="vectorized"``:
     per chain key (key, init key) = split(key); ``initialize_model`` (init_to_uniform,
-    up to 100 tries for a finite potential and gradient); ``hmc(algo="NUTS")``'s
-    ``init_kernel`` with NumPyro's defaults (diagonal mass, target acceptance 0.8, tree
-    depth 10, step size and mass adaptation during warm-up); ``sample_kernel`` for
-    warm-up + draws, keeping the draws; ``postprocess_fn`` for the constrained values and
-    the deterministic sites. Inside a jit, ``initialize_model`` skips its eager checks.
+    up to 100 tries for a finite potential and gradient); then the shared driver
+    :func:`fogbayes.inference.nuts.chain_sampler` with NumPyro's defaults (diagonal mass
+    per site, target acceptance 0.8, tree depth 10, step size and mass adaptation during
+    warm-up), ``postprocess_fn`` giving the constrained values and deterministic sites. Inside a jit, ``initialize_model`` skips its eager checks.
 
     The factory is cached per (num_warmup, num_samples) (they fix the scan length and the
     adaptation schedule); x, the masks and sigma_scale are traced arguments, so another
@@ -113,28 +112,21 @@ def _sampler(num_warmup: int, num_samples: int):
     (JAX's jit cache, keyed by shapes: n, P, Q, chains). Returns constrained draws
     {site: (chains, num_samples, ...)} and the divergence flags (chains, num_samples).
     """
-    from numpyro.infer.hmc import hmc
     from numpyro.infer.util import initialize_model
+
+    from .nuts import chain_sampler
 
     def run(keys, x, mask_phi, mask_theta, sigma_scale):
         TRACES["sampler"] += 1
         args = (x, mask_phi, mask_theta, sigma_scale)
         keys, k_init = jnp.swapaxes(jax.vmap(jax.random.split)(keys), 0, 1)
         info = initialize_model(k_init, arma_model, model_args=args, dynamic_args=True)
-        init_kernel, sample_kernel = hmc(potential_fn_gen=info.potential_fn, algo="NUTS")
         # dense_mass=[]: what NUTS(model) passes for dense_mass=False (a diagonal mass per
-        # site rather than one over the raveled vector; the same draws as MCMC for a seed)
-        state = jax.vmap(lambda z, k: init_kernel(z, num_warmup, dense_mass=[], model_args=args,
-                                                  rng_key=k))(info.param_info, keys)
-
-        def step(st, _):
-            st = jax.vmap(lambda s: sample_kernel(s, model_args=args))(st)
-            return st, (st.z, st.diverging)
-
-        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
-        zs = jax.tree.map(lambda v: jnp.swapaxes(v[num_warmup:], 0, 1), zs)  # (C, D, ...)
-        post = jax.vmap(jax.vmap(info.postprocess_fn(*args)))(zs)
-        return post, div[num_warmup:].T
+        # site rather than one over the raveled vector)
+        sample = chain_sampler(info.potential_fn, num_warmup, num_samples, dense_mass=[],
+                               postprocess=lambda z, *a: info.postprocess_fn(*a)(z),
+                               jit=False)
+        return sample(keys, info.param_info, *args)
 
     return jax.jit(run)
 

@@ -269,32 +269,16 @@ def _sampler(noise: str, p_ar: int, prior_scale: float, target_accept: float, wa
     configuration and data shape (NumPyro's functional ``hmc`` API; the data are arguments,
     so another table of the same shape reuses it: a new ``MCMC`` object per call compiled
     again for ~15 s). Returns constrained draws (chains, samples, ...) and divergences."""
-    from numpyro.infer.hmc import hmc
     from numpyro.infer.util import constrain_fn, potential_energy
 
+    from .nuts import chain_sampler
+
     model = partial(_model, noise=noise, p_ar=p_ar, prior_scale=prior_scale)
-    init_kernel, sample_kernel = hmc(
-        potential_fn_gen=lambda d, start: partial(potential_energy, model, (d, start), {}),
-        algo="NUTS")
-
-    def chain(key, z0, d, start):
-        args = (d, start)
-        state = init_kernel(z0, warmup, target_accept_prob=target_accept, model_args=args,
-                            rng_key=key)
-
-        def step(st, _):
-            st = sample_kernel(st, model_args=args)
-            return st, (st.z, st.diverging)
-
-        _, (zs, div) = jax.lax.scan(step, state, None, length=warmup + samples)
-        zs = jax.tree.map(lambda v: v[warmup:], zs)
-        post = jax.vmap(lambda z: constrain_fn(model, args, {}, z, return_deterministic=True))(zs)
-        return post, div[warmup:]
-
-    if chain_method == "sequential":
-        return jax.jit(lambda keys, z0, d, start: jax.lax.map(
-            lambda kz: chain(kz[0], kz[1], d, start), (keys, z0)))
-    return jax.jit(jax.vmap(chain, in_axes=(0, 0, None, None)))
+    return chain_sampler(
+        lambda d, start: partial(potential_energy, model, (d, start), {}), warmup, samples,
+        target_accept_prob=target_accept, dense_mass=False, chain_method=chain_method,
+        postprocess=lambda z, d, start: constrain_fn(model, (d, start), {}, z,
+                                                     return_deterministic=True))
 
 
 def _unconstrained(init: dict, chains: int) -> dict:
