@@ -93,3 +93,24 @@ def test_a_fold_holding_all_of_a_warm_up_does_not_judge_it():
     c = holdout.compare(h1, h0)
     assert c.folds == holdout.N_FOLDS - 1
     assert c.lpd_before == pytest.approx(h0.per_fold[1:].sum())
+
+
+def test_compare_keeps_a_term_within_one_standard_error_and_drops_one_beyond():
+    """Paired fold differences d_k: sum -0.5 with se sqrt(10 var d) ~ 6 is the folds' own
+    scatter (kept); sum -12 with se ~ 5 is worse (not kept); new columns beyond the model
+    without the term decide which folds judge."""
+    K = holdout.N_FOLDS
+    base = holdout.Holdout(0.0, np.zeros(K), 100, np.ones((K, 2)))
+
+    def with_d(d, info_new=1.0):
+        info = np.column_stack([np.ones((K, 2)), np.full(K, info_new)])
+        return holdout.Holdout(float(np.sum(d)), np.asarray(d, float), 100, info)
+
+    noisy = np.array([3.0, -3.0, 2.0, -2.0, 2.5, -2.5, 1.0, -1.0, 0.5, -1.0])
+    c = holdout.compare(with_d(noisy), base)
+    assert c.kept and c.lpd - c.lpd_before == pytest.approx(-0.5)
+    assert c.se == pytest.approx(np.sqrt(K * np.var(noisy, ddof=1)))
+    worse = np.array([-3.0, -1.0, -1.5, -0.5, -2.0, -1.0, -1.0, -1.5, -0.5, -0.0])
+    assert not holdout.compare(with_d(worse), base).kept
+    uninformed = with_d(worse, info_new=0.01)  # no fold can judge the new coefficient
+    assert holdout.compare(uninformed, base).folds == 0 and holdout.compare(uninformed, base).kept

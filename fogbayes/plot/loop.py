@@ -228,8 +228,9 @@ def loop_section(res):
     for r in h.get("not_kept", []):
         sec.note(f"Not kept: {r['effect']} was supported by the evidence but predicted "
                  f"held-out time blocks worse (log predictive density {fmt(r['lpd'])} against "
-                 f"{fmt(r['lpd_before'])} nats without it, over the {r['folds_judging']} of "
-                 f"{r['folds']} folds that can judge it).", ok=False)
+                 f"{fmt(r['lpd_before'])} nats without it, standard error of the difference "
+                 f"{fmt(r['diff_se'])}, over the {r['folds_judging']} of {r['folds']} folds "
+                 f"that can judge it).", ok=False)
     if h:
         sec.text(f"Held-out check ({h['folds']} contiguous time folds, each predicted from the "
                  f"others): log predictive density {fmt(h['lpd_base'])} nats for the base model, "
