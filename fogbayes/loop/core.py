@@ -11,9 +11,9 @@
         and add the winner, listing the indistinguishable ones as alternatives
         (an accepted step's time is then placed inside its block and a searched scale
         re-scored under the refit's noise, :func:`fogbayes.diagnose.refine.polish`)
-        and re-choose the noise components for the model with it; keep the term unless
-        the model with it predicts held-out folds of the record worse (:mod:`.holdout`,
-        time-blocked cross-validation, beyond one standard error), else drop that candidate
+        and re-choose the noise components for the model with it; keep the term only if
+        the model with it predicts held-out folds of the record at least as well
+        (:mod:`.holdout`, time-blocked cross-validation), otherwise drop that candidate
     scan the final residual for structure no candidate names (``unexplained``)
 
 See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
@@ -75,11 +75,11 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "(level 0.05); the "
         "one not rejected wins; if neither is rejected they are indistinguishable, the one "
         "with fewer searched parameters is kept and the other listed in 'alternatives'; "
-        "if both are, the higher likelihood. The winner is kept unless the model with it "
+        "if both are, the higher likelihood. The winner is kept only if the model with it "
         "predicts held-out time-blocked folds (10, each scored by its exact predictive "
-        "density given the other blocks, coefficients refitted without it) worse than the "
-        "model without it by more than one standard error of the paired fold differences; "
-        "otherwise it is set aside and the next step decides among the others. "
+        "density given the other blocks, coefficients refitted without it; folds that "
+        "cannot identify its coefficients left out) at least as well as the model without "
+        "it; otherwise it is set aside and the next step decides among the others. "
         "alpha = 0.01 by default. After the decision, "
         "an accepted step's time is placed to 1/20 of a block (exact block columns, kept "
         "if the refitted likelihood rises).")
