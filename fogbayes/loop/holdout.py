@@ -28,9 +28,11 @@ all the information about a new coefficient -- a warm-up inside the first fold, 
 its edge -- leaves it unidentified by the other folds, and its prediction there says
 nothing about the term. A fold is left out when the other folds carry less than
 :data:`MIN_INFORMATION` of the full record's information about any new coefficient
-(the ratio of its GLS variances, full record / without the fold). The filter is linear, so the innovations of y - X beta are those of y
-minus those of X times beta: one pass per fold on [y, X] gives both beta_(-k) and
-log p(y_(-k); beta_(-k)), and one pass on the full mask serves every fold.
+(the ratio of its GLS variances, full record / without the fold).
+
+The filter is linear, so the innovations of y - X beta are those of y minus those of X
+times beta: one pass per fold on [y, X] gives both beta_(-k) and log p(y_(-k); beta_(-k)),
+and one pass on the full mask serves every fold.
 """
 
 from __future__ import annotations
