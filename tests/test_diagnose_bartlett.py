@@ -6,7 +6,7 @@ is chi^2_dof, so the factor (mean of 20 simulated ratios / dof, floored at 1) mu
 near 1. With a fixed seed, the mean of 20 chi^2_1 draws exceeds 2 with probability ~0.005.
 The walk case, where it must exceed 1, is in tests/test_loop_effects.py.
 
-Given the decision it feeds, the factor is estimated sequentially (batches of 20 until the
+Given the decision it feeds, the factor is estimated sequentially (batches of 5 until the
 decision is the same at +-2 standard errors, at most ``n_max``): a settled decision must
 leave the first batch's factor unchanged, an open one must average every batch.
 """
@@ -42,17 +42,17 @@ def _white_record_with_drift():
 def test_the_factor_is_near_one_for_a_regular_ratio():
     ctx, base, alt = _white_record_with_drift()
     assert not in_walk_mode(base)
-    c = bartlett_factor(ctx, base, alt, 1, seed=3)
+    c = bartlett_factor(ctx, base, alt, 1, n_sims=20, seed=3)
     assert 1.0 <= c < 2.0
 
 
 def test_the_sequential_factor_stops_when_settled_and_averages_every_batch_when_open():
     ctx, base, alt = _white_record_with_drift()
-    kw = {"n_sims": 10, "seed": 3}  # small batches: this checks the bookkeeping, not the value
+    kw = {"n_sims": 5, "seed": 3}  # this checks the bookkeeping, not the value
     first = bartlett_factor(ctx, base, alt, 1, **kw)
     assert bartlett_factor(ctx, base, alt, 1, decide=lambda c: True, **kw) == first
     flips = itertools.cycle([True, False])  # never the same at both ends: always open
-    c = bartlett_factor(ctx, base, alt, 1, n_max=20, decide=lambda c: next(flips), **kw)
-    ratios = np.concatenate([null_ratios(ctx, base, alt, 10, seed=3 + BATCH_SEED * b)
+    c = bartlett_factor(ctx, base, alt, 1, n_max=10, decide=lambda c: next(flips), **kw)
+    ratios = np.concatenate([null_ratios(ctx, base, alt, 5, seed=3 + BATCH_SEED * b)
                              for b in range(2)])
     assert c == max(1.0, float(ratios.mean())) != first

@@ -4,7 +4,7 @@
 * :mod:`.evidence` -- bootstrap-calibrated screening under the state-space noise model;
 * :mod:`.reml` -- restricted-likelihood noise hyperparameters for the null simulations;
 * :mod:`.compete` -- candidates that explain the same residual, ranked by a bootstrap duel;
-* :mod:`.markov` -- the ``markov_noise`` noise-model candidate;
+* :mod:`.markov` -- one more Gauss-Markov noise component (start, refit, chi^2_2 p);
 * :mod:`.elpd` -- PSIS-LOO / WAIC through ArviZ;
 * :mod:`.scans` -- structure no candidate names (``unexplained``);
 * :mod:`.covariates` / :mod:`.corners` -- the block grid and the drivers, dT/dt with the

@@ -264,7 +264,7 @@ def screen(ctx: Context, fit: ModelFit, cands: list[Candidate], *, n_sims: int =
     """Screen every linear and spectral candidate against the fitted model (one filter pass).
 
     Returns the whitened model and the screened candidates, best (smallest calibrated p) first.
-    Noise candidates are screened by :func:`fogbayes.diagnose.markov.screen_markov`.
+    Gauss-Markov noise components are chosen apart, by :mod:`fogbayes.loop.noise_model`.
     """
     lin = [c for c in cands if c.kind == "linear"]
     Zs = [candidate_columns(ctx, c) for c in lin]

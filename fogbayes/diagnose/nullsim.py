@@ -11,8 +11,8 @@
       S_XX = sum_t m_t v^X_t v^X_t' / F_t,   S_Xy = sum_t m_t v^X_t v^y_t / F_t
       RSS  = S_yy - S_yX S_XX^-1 S_Xy,      log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n]
 
-  (the same profile as ``noise_ssm.gls``, per column). The ``markov_noise`` screening
-  and its bootstrap use it.
+  (the same profile as ``noise_ssm.gls``, per column). The start of a Gauss-Markov
+  component (:func:`fogbayes.diagnose.markov.markov_start`) uses it too.
 """
 
 from __future__ import annotations

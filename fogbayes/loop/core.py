@@ -37,6 +37,7 @@ from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from ..inference import noise_ssm as ns
+from ..workflow.thermal import DEFAULT_ORDERS
 from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, base_terms
@@ -282,7 +283,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     markov = allowed is None or "markov_noise" in allowed
     noise_rows: list[dict] = []
     if markov:
-        fit, noise_rows = choose_noise(ctx, fit, alpha=alpha, seed=seed)
+        fit, noise_rows = choose_noise(ctx, fit, alpha=alpha)
     fit0 = fit
     cache: dict = {}
     m0 = _metrics(ctx, fit, seed, cache)
@@ -299,7 +300,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         new = polish(ctx, fit, tr.fit)  # a step's time, or a searched scale, under the refit
         rows: list[dict] = []
         if markov:
-            new, rows = choose_noise(ctx, new, alpha=alpha, seed=seed,
+            new, rows = choose_noise(ctx, new, alpha=alpha,
                                      after=f"+ {s.candidate.effect}")
         h_new = holdout.score(ctx, new)
         cmp = holdout.compare(h_new, h_cur)
@@ -334,8 +335,8 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
                       warnings, tuple(noise_rows), noise_adev, held)
 
 
-#: base orders of ``fogbayes fit`` (:mod:`fogbayes.workflow.thermal`), for the plain-fit check
-PLAIN_ORDERS = {"bias-t": "3", "thermal": "2"}
+#: base orders of ``fogbayes fit``, for the plain-fit check
+PLAIN_ORDERS = DEFAULT_ORDERS
 
 
 def _plain_check(ctx: Context, model: str, fit: ModelFit, h_final) -> dict:

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
-from ..diagnose.markov import markov_log_p, refit_markov, screen_markov
+from ..diagnose.markov import markov_log_p, markov_start, refit_markov
 from ..diagnose.terms import design
 from ..inference import noise_ssm as ns
 
@@ -81,7 +81,7 @@ def _row(action: str, after: str, lr: float, lp: float, fit: ModelFit) -> dict:
 
 
 def choose(ctx: Context, fit: ModelFit, *, alpha: float, after: str = "base model",
-           max_components: int = MAX_COMPONENTS, seed: int = 0) -> tuple[ModelFit, list[dict]]:
+           max_components: int = MAX_COMPONENTS) -> tuple[ModelFit, list[dict]]:
     """Re-choose the Gauss-Markov components of ``fit`` (module doc); (fit, evidence rows).
 
     ``after`` names the model the choice was made for (for the evidence rows).
@@ -96,7 +96,7 @@ def choose(ctx: Context, fit: ModelFit, *, alpha: float, after: str = "base mode
         rows.append(_row("dropped", after, lr, lp, red))
         fit = red
     while fit.noise.spec.n_markov < max_components:
-        s = screen_markov(ctx, fit, None, seed=seed)  # the start of the refit (tau_c, v)
+        s = markov_start(ctx, fit)
         if s is None:
             break
         try:

@@ -44,7 +44,7 @@ from ..units import convert_rate
 from ._thermal_data import Processing, fit_blocks, make_processing, sample_covariates
 
 MODELS = ("bias-t", "thermal")
-_DEFAULT = {"bias-t": "3", "thermal": "2"}
+DEFAULT_ORDERS = {"bias-t": "3", "thermal": "2"}
 _AUTO = {"bias-t": "1-4", "thermal": "1-3,1-2"}
 _SPEC_KEYS = ("cross", "extra", "gradient", "extra_order", "temperature")
 _BAYES_KEYS = ("noise", "ar_order", "ma_order", "num_warmup", "num_samples", "num_chains",
@@ -65,7 +65,7 @@ def _range(text: str, model: str) -> list[int]:
 
 def parse_orders(model: str, orders: str | None) -> list[tuple[int, int]]:
     """Candidate (T order, dT/dt order) pairs for ``model`` (see the module doc)."""
-    text = _DEFAULT[model] if orders in (None, "") else str(orders).strip().lower()
+    text = DEFAULT_ORDERS[model] if orders in (None, "") else str(orders).strip().lower()
     text = _AUTO[model] if text == "auto" else text
     parts = text.split(",")
     if model == "bias-t":
