@@ -16,7 +16,9 @@ alternatives, so a likelihood ratio compares them)::
     scale_factor_nonlinearity  next power(s) of W                   (rate table)
     scale_factor_asymmetry     |W|
     scale_factor_temperature   W T'^(k+1)
-    markov_noise               a free Gauss-Markov noise component  (noise model; tau searched)
+
+``markov_noise`` (a free Gauss-Markov noise component) is a design effect name too, but it
+is part of the noise model, chosen apart from these candidates (:mod:`fogbayes.loop.noise_model`).
 
 Grids are coarse (the screening max over a grid is calibrated by simulation); the chosen
 value is refined afterwards (:mod:`fogbayes.diagnose.refine`). The step's time is the
@@ -48,14 +50,14 @@ EFFECTS = ("temperature_order", "temperature_rate", "temperature_gradient", "the
 
 #: How many times the loop may add an effect of each name.
 MAX_TIMES = {"temperature_order": 3, "time_drift": 2, "step": 3, "periodic": 3,
-             "scale_factor_nonlinearity": 2, "markov_noise": 1}
+             "scale_factor_nonlinearity": 2}
 
 
 class Candidate(NamedTuple):
     """One effect the model lacks.
 
-    effect: docs/DESIGN.md name; kind: "linear" (grid of nested terms), "spectral" (periodic,
-    scanned by FFT) or "noise" (a noise-model component); grid: one Term per searched
+    effect: docs/DESIGN.md name; kind: "linear" (grid of nested terms) or "spectral"
+    (periodic, scanned by FFT); grid: one Term per searched
     value; covariates: the drivers it uses; searched: the searched parameter or None.
     """
 
@@ -193,18 +195,11 @@ def periodic_candidate(ctx: Context, terms) -> list[Candidate]:
     return [Candidate("periodic", "spectral", (), ("time",), "frequency")]
 
 
-def markov_candidate(ctx: Context, n_markov: int) -> list[Candidate]:
-    if n_markov >= MAX_TIMES["markov_noise"]:
-        return []
-    return [Candidate("markov_noise", "noise", (), ("noise",), "tau_c")]
-
-
-def candidates_for(ctx: Context, terms, *, n_markov: int = 0,
+def candidates_for(ctx: Context, terms, *,
                    effects: tuple[str, ...] | None = None) -> list[Candidate]:
-    """Every candidate the current model (``terms``, ``n_markov`` noise components) lacks."""
+    """Every deterministic candidate the current model (``terms``) lacks."""
     out = (thermal_candidates(ctx, terms) + time_candidates(ctx, terms)
-           + rate_table_candidates(ctx, terms) + periodic_candidate(ctx, terms)
-           + markov_candidate(ctx, n_markov))
+           + rate_table_candidates(ctx, terms) + periodic_candidate(ctx, terms))
     if effects is not None:
         out = [c for c in out if c.effect in effects]
     return out

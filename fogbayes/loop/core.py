@@ -221,7 +221,7 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
 
 def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
     """Screen, refit the shortlist, apply the rule. Returns (accepted Trial | None, evidence)."""
-    cands = [c for c in candidates_for(ctx, fit.terms, effects=opts.effects) if c.kind != "noise"]
+    cands = candidates_for(ctx, fit.terms, effects=opts.effects)
     if not cands:
         return None, None, {"reason": "no candidate left"}
     pairs = _screen_all(ctx, fit, cands, opts, step, cache)

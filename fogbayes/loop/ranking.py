@@ -31,14 +31,13 @@ def supported_trials(ctx, fit, trials, opts, n_cand: int, cache) -> list:
         if tr.log_p_fw >= log_alpha:
             break
         # The refitted ratio gains from re-estimating the noise, which the fixed-noise
-        # bootstrap does not see: a linear candidate must also be suggestive (family-wise
+        # bootstrap does not see: a candidate must also be suggestive (family-wise
         # p < SCREEN_GATE) in the calibrated screening itself -- under the fitted noise
         # model, not the second look without a random walk (core._screen_all), unless the
         # candidate's refit dropped the walk (core._trial then clears gate_log_p).
         s = tr.screened
         gate = s.log_p if s.gate_log_p is None else s.gate_log_p
-        if s.candidate.kind != "noise" and \
-                ev.fw_log_p(gate, n_cand) >= math.log(SCREEN_GATE):
+        if ev.fw_log_p(gate, n_cand) >= math.log(SCREEN_GATE):
             continue
         d = el.compare(ctx, tr.fit, fit, seed=opts.seed, cache=cache)
         if d.diff > 0:
