@@ -239,14 +239,22 @@ def profile_np(V: np.ndarray, F: np.ndarray, mask: np.ndarray):
     return float(ll), beta, s2 * inv, s2
 
 
+def _negll(spec, theta, y, X, mask, w, pad):
+    phi, q, p0 = system(spec, unpack(spec, theta))
+    Y = jnp.concatenate([y[:, None], X], axis=1) * mask[:, None]
+    V, F = _filter(phi, q, p0, Y, mask, w)
+    return -_profile(V, F, mask, pad)[0]
+
+
 @partial(jax.jit, static_argnums=0)
 def _negll_and_grad(spec, theta, y, X, mask, w, pad):
-    def f(th):
-        phi, q, p0 = system(spec, unpack(spec, th))
-        Y = jnp.concatenate([y[:, None], X], axis=1) * mask[:, None]
-        V, F = _filter(phi, q, p0, Y, mask, w)
-        return -_profile(V, F, mask, pad)[0]
-    return jax.value_and_grad(f)(theta)
+    return jax.value_and_grad(lambda th: _negll(spec, th, y, X, mask, w, pad))(theta)
+
+
+@partial(jax.jit, static_argnums=0)
+def _negll_starts(spec, thetas, y, X, mask, w, pad):
+    """negll at every row of ``thetas`` (one vmapped pass: the start grid costs one call)."""
+    return jax.vmap(lambda th: _negll(spec, th, y, X, mask, w, pad))(thetas)
 
 
 def pad_columns(X: np.ndarray, multiple: int = 8) -> tuple[np.ndarray, np.ndarray]:
@@ -332,7 +340,9 @@ def fit_noise(spec: NoiseSpec, y, X, mask=None, w=None, *, theta0=None,
         starts = np.vstack([starts, np.atleast_2d(extra_starts)])
     lo, hi = np.array(bounds(spec)).T
     starts = np.clip(starts, lo, hi)
-    vals = np.array([float(_negll_and_grad(spec, jnp.asarray(th), *args)[0]) for th in starts])
+    rows = -(-len(starts) // 8) * 8  # few distinct shapes: few compilations
+    padded = np.vstack([starts, np.repeat(starts[:1], rows - len(starts), axis=0)])
+    vals = np.asarray(_negll_starts(spec, jnp.asarray(padded), *args), dtype=float)[:len(starts)]
     vals = np.where(np.isfinite(vals), vals, np.inf)
 
     def fun(th):
