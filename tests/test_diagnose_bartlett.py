@@ -56,3 +56,23 @@ def test_the_sequential_factor_stops_when_settled_and_averages_every_batch_when_
     ratios = np.concatenate([null_ratios(ctx, base, alt, 5, seed=3 + BATCH_SEED * b)
                              for b in range(2)])
     assert c == max(1.0, float(ratios.mean())) != first
+
+
+def test_a_few_agreeing_ratios_cannot_settle_a_close_decision(monkeypatch):
+    # Null ratios that all happen to be 0 have a sample standard error of 0; the factor's own
+    # model (LR / c ~ chi^2_1, sd >= c sqrt(2)) keeps +-2 se at +-1.26 after 5 series, which
+    # straddles a decision flipping at c = 1.2, and at +-0.89 after 10, which does not.
+    from fogbayes.diagnose import bartlett
+
+    calls = []
+
+    def zeros(ctx, base, alt, n_sims, *, seed):
+        calls.append(seed)
+        return np.zeros(n_sims)
+
+    monkeypatch.setattr(bartlett, "null_ratios", zeros)
+    c = bartlett.bartlett_factor(None, None, None, 1, n_sims=5, decide=lambda c: c < 1.2)
+    assert c == 1.0 and len(calls) == 2
+    calls.clear()
+    bartlett.bartlett_factor(None, None, None, 1, n_sims=5, decide=lambda c: c < 1.3)
+    assert len(calls) == 1  # settled at once where the decision is far
