@@ -7,8 +7,9 @@ theta kept (one compiled, vmapped call evaluates the whole grid), then every noi
 hyperparameter is refitted.
 
 The decision uses the refitted likelihood ratio, whose null distribution is heavier than
-the fixed-tau_c boundary mixture (0.5 chi^2_0 + 0.5 chi^2_1, Self & Liang 1987): measured by running the loop on 56 pure-noise records (four noise mixes, 3-6 h,
-1-10 Hz) it has mean 1.8, 7 % above 5 and 1 of 56 above 8.3 -- a chi^2_2 (mean 2,
+the fixed-tau_c boundary mixture (0.5 chi^2_0 + 0.5 chi^2_1, Self & Liang 1987): measured
+by running the loop on 56 pure-noise records (four noise mixes, 3-6 h, 1-10 Hz) it has
+mean 1.8, 7 % above 5 and 1 of 56 above 8.3 -- a chi^2_2 (mean 2,
 P(> 5) = 8 %, P(> 8.3) = 1.6 %), not the fixed-tau mixture. :func:`markov_log_p` uses chi^2_2.
 """
 
