@@ -335,20 +335,16 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
                       warnings, tuple(noise_rows), noise_adev, held)
 
 
-#: base orders of ``fogbayes fit``, for the plain-fit check
-PLAIN_ORDERS = DEFAULT_ORDERS
-
-
 def _plain_check(ctx: Context, model: str, fit: ModelFit, h_final) -> dict:
     """The plain fit's terms by least squares, scored by the same held-out folds under the
     final noise model: the loop's output should not predict worse than what the user would
     otherwise run."""
-    if model not in PLAIN_ORDERS:
+    if model not in DEFAULT_ORDERS:
         return {}
-    terms = tuple(base_terms(ctx, model, PLAIN_ORDERS[model]))
+    terms = tuple(base_terms(ctx, model, DEFAULT_ORDERS[model]))
     plain = ModelFit(terms, ctx.block_design(list(terms)), fit.noise, np.zeros(0))
     h = holdout.score(ctx, plain, ols=True)
-    return {"plain_fit": f"fogbayes fit -m {model} (orders {PLAIN_ORDERS[model]}, least squares)",
+    return {"plain_fit": f"fogbayes fit -m {model} (orders {DEFAULT_ORDERS[model]}, least squares)",
             "lpd_plain_fit": h.lpd, "final_not_worse_than_plain_fit": bool(h_final.lpd >= h.lpd)}
 
 
