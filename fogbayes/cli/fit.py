@@ -17,7 +17,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, RE
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT,
                       refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, fit_channels
+from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, channels, fit_channels
 
 
 #: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
@@ -146,6 +146,11 @@ def fit(
     option: list[str] = typer.Option(None, "--option", "-O",
                                      help="Model option KEY=VALUE (repeatable), e.g. rate_window_s=30."),
     strict: bool = typer.Option(False, help="Exit with code 1 when the fit did not converge."),
+    estimator: str = typer.Option(
+        "ols", "--estimator",
+        help="bias-t/thermal: 'ols' (least squares on 1 s blocks, paper 004) or 'gls' (the "
+             "closed loop's fit with no step added: GLS under the white + flicker + random-walk "
+             "noise model, honest standard errors; writes the loop document)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
@@ -169,6 +174,7 @@ def fit(
       fogbayes fit run.csv -m bias-t --orders auto --json fit.json
       fogbayes fit run.csv -m thermal --orders 2,2 --bayes --json fit.json
       fogbayes fit chamber.csv -m thermal --processing paper --json fit.json
+      fogbayes fit chamber.csv -m thermal --orders 2,1 --estimator gls --json fit.json
       fogbayes -q fit table.csv -m composite --json - > fit.json
       fogbayes fit flight.ulg -m bias-t --axis all --json fit.json   # then: export -f px4
 
@@ -183,9 +189,14 @@ def fit(
     for key, value in (("processing", processing), ("noise", noise)):
         if value is not None:
             options[key] = value
+    gls = _gls_check(estimator, model, orders, bayes, options, axis, column)
     from ..data.logs.firmware import rate_warnings
 
     def fit_one(recording) -> dict:
+        if gls:
+            from ..loop.gls_fit import fit_gls
+
+            return fit_gls(recording, model, orders, seed=seed)
         doc = wf.fit_recording(recording, model=model, orders=orders, bayes=bayes, seed=seed,
                                **options)
         more = rate_warnings(recording.meta.extra)  # a log's rates already corrected/rotated
@@ -202,9 +213,39 @@ def fit(
     write_json(doc, json_out)
     for name, one in docs.items():
         tag = "" if name is None else f"[{name}] "
-        say(tag + summary_line(one))
+        if gls:
+            from ..loop.gls_fit import summary_line as gls_line
+
+            say(tag + gls_line(one))
+        else:
+            say(tag + summary_line(one))
         for warning in one.get("warnings") or []:  # e.g. not identifiable, gross errors
             say(f"{tag}warning: {warning}")
-    if strict and not all(one.get("converged", False) for one in docs.values()):
+    converged = [one.get("calibration", {}).get("noise", {}).get("converged", False) if gls
+                 else one.get("converged", False) for one in docs.values()]
+    if strict and not all(converged):
         say("the fit did not converge (--strict)")
         raise typer.Exit(1)
+
+
+def _gls_check(estimator: str, model: str, orders, bayes: bool, options: dict, axis,
+               column: str) -> bool:
+    """Whether ``--estimator`` asks for the GLS path; what that path cannot take is refused
+    here, in one line each (it has the loop's own processing and no posterior)."""
+    from ..errors import ArgumentError
+
+    if estimator not in ("ols", "gls"):
+        raise ArgumentError(f"--estimator {estimator!r} is not ols or gls", column="--estimator",
+                            fix="use --estimator ols (default) or --estimator gls")
+    if estimator == "ols":
+        return False
+    from ..loop.gls_fit import gls_orders
+
+    gls_orders(model, orders)
+    taken = [flag for flag, used in (("--bayes", bayes), ("--processing/--noise/-O", options),
+                                     ("several axes", len(channels(axis, column)) > 1)) if used]
+    if taken:
+        raise ArgumentError(f"--estimator gls does not take {taken[0]}", column="--estimator",
+                            fix="drop it, or use --estimator ols (--bayes gives the posterior "
+                                "there); fit one axis at a time with --axis x")
+    return True

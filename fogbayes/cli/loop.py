@@ -37,8 +37,9 @@ def loop(
     max_steps: int = typer.Option(5, "--max-steps", min=0, help="Add at most this many effects."),
     report: Path = typer.Option(None, "--report", help="Also write an HTML report of the loop."),
     orders: str = typer.Option(None, "--orders", "--order",
-                               help="Base orders: bias-t/thermal 'n' (default 2); "
-                                    "composite 's1,s2,u0[,u1]' (default 0,0,2)."),
+                               help="Base orders: bias-t 'n' (default 2); thermal 'n' or "
+                                    "'n,m' (T, dT/dt; default 2); composite "
+                                    "'s1,s2,u0[,u1]' (default 0,0,2)."),
     alpha: float = typer.Option(0.01, help="Family-wise false-effect level of each step."),
     seed: int = typer.Option(0, help="Seed of the bootstrap calibration and ELPD draws."),
     noise_prior: Path = typer.Option(

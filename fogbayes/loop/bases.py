@@ -1,7 +1,7 @@
 """Base models the loop starts from, as term lists, and which effects each may gain.
 
     bias-t     b = c0 + sum_{k<=n} c_k T'^k                       (n = 2 by default, paper 004)
-    thermal    bias-t + sum_{j<=2} d_j (dT/dt)'^j                 (paper 004, eq. 14)
+    thermal    bias-t + sum_{j<=m} d_j (dT/dt)'^j                 (paper 004, eq. 14; m = 2)
     composite  U = S1(T) S2(W) W + U0(T) [+ U1(T) t]  linearised  (paper 000); orders
                "s1,s2,u0[,u1]" give W' T'^i (i <= s1), W'^(j+1) (j <= s2), T'^i (i <= u0),
                t' T'^i (i <= u1). Default "0,0,2": a linear scale factor and a quadratic
@@ -9,6 +9,10 @@
     allan      a constant bias; the noise model (white + flicker + random walk) is the
                five-term model, and the loop may add only noise terms: a Gauss-Markov
                component or a sinusoid (``markov_noise``, ``periodic``).
+
+Orders use ``fogbayes fit``'s grammar (:mod:`fogbayes.workflow.thermal`): bias-t "n";
+thermal "n" (T and dT/dt both n) or "n,m"; ``fogbayes fit --estimator gls`` is this loop's
+fit of these terms with no step added (:mod:`fogbayes.loop.gls_fit`).
 
 T' = (T - centre) / scale and W' = W / max|W| (centred, scaled bases). On a soaked
 record (T spans < 0.1 deg C) the temperature terms are left out: no T law is identifiable.
@@ -60,21 +64,22 @@ def _need_temperature(ctx: Context, model: str, source) -> None:
 
 
 def parse_orders(model: str, orders: str | None) -> tuple[int, ...]:
-    """Orders for a base model: bias-t/thermal "n" (T order); composite "s1,s2,u0[,u1]"."""
-    default = {"bias-t": (2,), "thermal": (2,), "composite": (0, 0, 2), "allan": ()}[model]
+    """Orders for a base model: bias-t "n" (T order); thermal "n" or "n,m" (T order, dT/dt
+    order; "n" sets both, as ``fogbayes fit``); composite "s1,s2,u0[,u1]"."""
+    default = {"bias-t": (2,), "thermal": (2, 2), "composite": (0, 0, 2), "allan": ()}[model]
     if orders is None:
         return default
     try:
         vals = tuple(int(v) for v in str(orders).split(","))
     except ValueError:
         vals = ()
-    ok = (len(vals) == 1 if model in ("bias-t", "thermal") else
-          len(vals) in (3, 4) if model == "composite" else len(vals) == 0)
+    ok = (len(vals) == 1 if model == "bias-t" else len(vals) in (1, 2) if model == "thermal"
+          else len(vals) in (3, 4) if model == "composite" else len(vals) == 0)
     if not ok or any(v < 0 or v > 6 for v in vals):
         raise ModelNameError(f"orders {orders!r} do not fit model '{model}'", column="orders",
-                             fix="bias-t/thermal: one integer (e.g. 2); composite: "
-                                 "s1,s2,u0[,u1] (e.g. 0,0,2); allan: none")
-    return vals
+                             fix="bias-t: one integer (e.g. 2); thermal: n or n,m (T, dT/dt; "
+                                 "e.g. 2,1); composite: s1,s2,u0[,u1] (e.g. 0,0,2); allan: none")
+    return vals * 2 if model == "thermal" and len(vals) == 1 else vals
 
 
 def base_terms(ctx: Context, model: str, orders: str | None = None, *, source=None) -> list[Term]:
@@ -93,9 +98,10 @@ def base_terms(ctx: Context, model: str, orders: str | None = None, *, source=No
         if o[0] > 0 and varies:
             terms.append(Term("tpoly", {"effect": "base", "channel": 0,
                                         "powers": list(range(1, o[0] + 1)), "centre": c, "scale": s}))
-        if model == "thermal":
+        if model == "thermal" and o[1] > 0:
             rs = max(float(np.max(np.abs(ctx.cov.Tdot))), 1e-3)
-            terms.append(Term("rate_poly", {"effect": "base", "powers": [1, 2], "scale": rs}))
+            terms.append(Term("rate_poly", {"effect": "base", "powers": list(range(1, o[1] + 1)),
+                                            "scale": rs}))
         return terms
     if ctx.cov.omega is None:
         raise MissingColumnError("model 'composite' needs the reference input rate", file=source,

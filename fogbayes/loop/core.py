@@ -329,23 +329,32 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     if held.get("final_not_worse_than_plain_fit") is False:
         warnings += (f"the final model predicts held-out time blocks worse than "
                      f"{held['plain_fit']} (log predictive density {h_cur.lpd:.1f} vs "
-                     f"{held['lpd_plain_fit']:.1f}): compare with that fit before using it",)
+                     f"{held['lpd_plain_fit']:.1f}, {held['lpd_plain_fit'] - h_cur.lpd:.2f} "
+                     f"nats): compare with that fit before using it",)
     return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE,
                       noise_prior, input_json(rec), calibration_json(fit, ctx, model),
                       warnings, tuple(noise_rows), noise_adev, held)
 
 
+#: nats of held-out log predictive density by which the final model may trail the plain
+#: fit and still count as "not worse": two estimators of the same terms (GLS and least
+#: squares) differ by 1e-6..1e-2 nats on a record where the loop adds nothing, a difference
+#: no compensated output shows; 0.5 nats is a density ratio of 1.6 over the whole record.
+PLAIN_TOLERANCE_NATS = 0.5
+
+
 def _plain_check(ctx: Context, model: str, fit: ModelFit, h_final) -> dict:
     """The plain fit's terms by least squares, scored by the same held-out folds under the
     final noise model: the loop's output should not predict worse than what the user would
-    otherwise run."""
+    otherwise run (within :data:`PLAIN_TOLERANCE_NATS`)."""
     if model not in DEFAULT_ORDERS:
         return {}
     terms = tuple(base_terms(ctx, model, DEFAULT_ORDERS[model]))
     plain = ModelFit(terms, ctx.block_design(list(terms)), fit.noise, np.zeros(0))
     h = holdout.score(ctx, plain, ols=True)
     return {"plain_fit": f"fogbayes fit -m {model} (orders {DEFAULT_ORDERS[model]}, least squares)",
-            "lpd_plain_fit": h.lpd, "final_not_worse_than_plain_fit": bool(h_final.lpd >= h.lpd)}
+            "lpd_plain_fit": h.lpd, "tolerance_nats": PLAIN_TOLERANCE_NATS,
+            "final_not_worse_than_plain_fit": bool(h_final.lpd >= h.lpd - PLAIN_TOLERANCE_NATS)}
 
 
 def _allan_story(rec, ctx: Context, steps: list[Step], fit: ModelFit):

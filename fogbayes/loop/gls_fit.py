@@ -1,0 +1,64 @@
+"""``fogbayes fit --estimator gls``: the closed loop's fit with no step added.
+
+The loop's base fit is generalised least squares on block means under the noise model it
+chooses by maximum likelihood (white + flicker + random walk, plus Gauss-Markov components
+the evidence supports; :mod:`fogbayes.inference.noise_ssm`)::
+
+    beta = (X' S^-1 X)^-1 X' S^-1 y,     cov(beta) = s2 (X' S^-1 X)^-1
+
+with S the noise model's covariance of the block means (evaluated by a Kalman filter, never
+formed). Its standard errors hold under the flicker and random walk of a real gyro, where
+those of least squares on 1 s blocks (``--estimator ols``, the default and paper 004's
+estimator) are too small by the square root of the noise's long-memory variance inflation.
+
+This is the same code path as ``fogbayes loop --max-steps 0`` with the same orders: one
+estimator, one document (the loop document, ``fogbayes.loop/1``), which ``compensate``,
+``report``, ``batch`` and ``stream`` read like a fit document. What differs from the loop
+is only the default orders: the fit's (:data:`fogbayes.workflow.thermal.DEFAULT_ORDERS`,
+bias-t 3), since a fit has no step that could add a higher power (see
+:mod:`fogbayes.loop.bases` for why the loop starts at 2).
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..errors import ArgumentError
+from ..workflow.thermal import DEFAULT_ORDERS
+
+MODELS = ("bias-t", "thermal")
+
+
+def gls_orders(model: str, orders: str | None) -> str:
+    """``fogbayes fit``'s orders for the GLS path: fixed orders only (no range, no auto)."""
+    if model not in MODELS:
+        raise ArgumentError(f"--estimator gls fits models {', '.join(MODELS)}, not '{model}'",
+                            column="--estimator",
+                            fix=f"use --estimator ols for {model}, or -m bias-t / -m thermal")
+    text = DEFAULT_ORDERS[model] if orders in (None, "") else str(orders).strip()
+    if not re.fullmatch(r"\d+(,\d+)?", text.replace(" ", "")):
+        raise ArgumentError(f"--estimator gls takes fixed orders, got '{orders}'",
+                            column="--orders",
+                            fix="give the orders, e.g. --orders 3 (bias-t) or 2,1 (thermal); "
+                                "choose them first with --estimator ols --orders auto")
+    return text.replace(" ", "")
+
+
+def fit_gls(rec, model: str, orders: str | None = None, *, seed: int = 0) -> dict:
+    """The loop document of ``run_loop(rec, model, orders, max_steps=0)`` (module doc)."""
+    from .core import run_loop
+
+    return run_loop(rec, model, orders=gls_orders(model, orders), max_steps=0,
+                    seed=seed).to_json()
+
+
+def summary_line(doc: dict) -> str:
+    """One line for people: the estimator, its noise model and the residual 10 s RMS."""
+    noise = doc.get("calibration", {}).get("noise", {})
+    parts = ["white"] + (["flicker"] if noise.get("flicker_bank") else []) + \
+        (["random walk"] if noise.get("random_walk") else [])
+    k = int(noise.get("gauss_markov_components") or 0)
+    parts += [f"{k} Gauss-Markov"] if k else []
+    return (f"{doc.get('model')}: GLS under {' + '.join(parts)} noise, "
+            f"converged={noise.get('converged')}; residual 10 s RMS "
+            f"{doc['final']['rms']:.4g} deg/h")
