@@ -178,10 +178,12 @@ def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis,
     calibration run (a step, a linear drift, a periodic term) are not part of the sensor
     and are left out.
     """
+    from .diagnose.kinds import kind_of  # the loop's term kinds (the package imports JAX)
+
     cal = doc["calibration"]
     powers, coef, where, i = [], [], None, 0
     for t in cal["terms"]:
-        k = 2 if t["kind"] == "periodic" else len(t["params"].get("powers", [0]))
+        k = kind_of(t["kind"]).n_cols(t["params"])  # one rule of columns per kind
         c = cal["coefficients"][i:i + k]
         i += k
         if t.get("applies") == "run":
