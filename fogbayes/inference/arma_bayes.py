@@ -114,7 +114,7 @@ def _sampler(num_warmup: int, num_samples: int):
     """
     from numpyro.infer.util import initialize_model
 
-    from .nuts import chain_sampler
+    from .nuts import chain_sampler, on_host
 
     def run(keys, x, mask_phi, mask_theta, sigma_scale):
         TRACES["sampler"] += 1
@@ -128,7 +128,7 @@ def _sampler(num_warmup: int, num_samples: int):
                                jit=False)
         return sample(keys, info.param_info, *args)
 
-    return jax.jit(run)
+    return on_host(jax.jit(run))
 
 
 def _run(x, p, q, P, Q, seed: int, num_warmup: int, num_samples: int,

@@ -33,7 +33,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import numpyro.distributions as dist
-from .nuts import chain_sampler
+from .nuts import chain_sampler, on_host
 
 from ..errors import FogbayesError
 from ..models.arma import arma_loglik, pacf_to_ar
@@ -123,7 +123,7 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
         k_run, z0 = jax.vmap(start)(keys)
         return sample(k_run, z0, X, y)
 
-    return jax.jit(run)
+    return on_host(jax.jit(run))
 
 
 def noise_orders(noise: str, p: int, q: int) -> tuple[int, int]:

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import jax
 
+from .._lazy import host_device
+
 
 def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                   target_accept_prob: float = 0.8, dense_mass=True,
@@ -59,4 +61,16 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
             return jax.lax.map(lambda kz: chain(kz[0], kz[1], *args), (keys, z0))
         return jax.vmap(chain, in_axes=(0, 0) + (None,) * len(args))(keys, z0, *args)
 
-    return jax.jit(run) if jit else run
+    return on_host(jax.jit(run)) if jit else run
+
+
+def on_host(compiled):
+    """``compiled`` called on the CPU device (:func:`fogbayes._lazy.host_device`): NUTS
+    steps are small and sequential, and on an H100 machine the posteriors ran 2.6-3.1x
+    slower on the GPU than on its CPU (benchmarks/RESULTS_gpu.md)."""
+
+    def call(*args):
+        with host_device():
+            return compiled(*args)
+
+    return call

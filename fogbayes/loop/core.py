@@ -36,6 +36,7 @@ from ..diagnose.noise_prior import NoisePrior
 from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
+from .._lazy import host_device
 from ..inference import noise_ssm as ns
 from ..workflow.thermal import DEFAULT_ORDERS
 from ._threads import single_thread_blas
@@ -264,7 +265,7 @@ def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps
         noise_prior: a cap on the random walk from a static run
             (:mod:`fogbayes.diagnose.noise_prior`), applied to every fit of the loop.
     """
-    with single_thread_blas():
+    with single_thread_blas(), host_device():  # sequential scans: the CPU beats a GPU
         return _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
                     target_blocks, noise_prior)
 
