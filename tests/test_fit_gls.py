@@ -86,3 +86,26 @@ def test_the_loops_thermal_orders_read_like_the_fits(record):
     ctx = make_context(rec)
     assert [t.kind for t in base_terms(ctx, "thermal", "2,0")] == ["intercept", "tpoly"]
     assert base_terms(ctx, "thermal", "2,0") == base_terms(ctx, "bias-t", "2")
+
+
+def test_batch_applies_the_document_to_a_folder_like_compensate(record, both, tmp_path):
+    d, rec = record
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    save(rec, runs / "a.csv")
+    save(make_record("temperature_rate", seed=4, duration=1800.0, fs=1.0).recording,
+         runs / "b.csv")
+    rc = cli.main(["-q", "batch", str(runs), "-m", "thermal", "--task", "compensate",
+                   "--params", str(d / "fit.json"), "--out", str(tmp_path / "out")])
+    assert rc == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert [r["status"] for r in summary["rows"]] == ["ok", "ok"]
+    assert summary["options"]["params"]["schema"] == "fogbayes.loop/1"
+    for row in summary["rows"]:
+        name = row["file"].rsplit("/", 1)[-1]
+        assert cli.main(["-q", "compensate", str(runs / name), "--params", str(d / "fit.json"),
+                         "--out", str(tmp_path / f"one_{name}")]) == 0
+        one = pd.read_csv(tmp_path / f"one_{name}")
+        many = pd.read_csv(tmp_path / "out" / row["outputs"]["compensated"])
+        np.testing.assert_array_equal(many["output"], one["output"])
+        assert row["rms_after"] < row["rms_before"]

@@ -91,7 +91,7 @@ def run_batch(folder: str | Path, *, model: str, out: str | Path, task: str = "f
     summary = {"fogbayes_version": fogbayes.__version__, "task": task, "model": model,
                "engine": engine, "address": address, "workers": n_workers,
                "vectorized": bool(vectorize), "folder": str(folder), "pattern": pattern,
-               "options": opts._asdict(), "n_files": len(rows), "n_ok": n_ok,
+               "options": _options_json(opts), "n_files": len(rows), "n_ok": n_ok,
                "n_error": len(rows) - n_ok, "seconds": time.perf_counter() - t0, "rows": rows}
     write_json(summary, out / "summary.json")  # last: its presence means the run finished
     return summary
@@ -163,3 +163,15 @@ def _vectorized(files, model, task, out, opts: JobOptions, solver, on_done) -> l
         if on_done:
             on_done(row)
     return [rows[str(f)] for f in files]
+
+
+def _options_json(opts: JobOptions) -> dict:
+    """The options for the summary: a calibration applied is named, not copied whole."""
+    out = opts._asdict()
+    if opts.params is not None:
+        cal = opts.params.get("calibration") or {}
+        out["params"] = {"schema": opts.params.get("schema"), "model": opts.params.get("model"),
+                         "terms": [t.get("effect", "") + ":" + t.get("kind", "")
+                                   for t in cal.get("terms", [])]} if cal else \
+            {"schema": opts.params.get("schema"), "model": opts.params.get("model")}
+    return out

@@ -29,6 +29,8 @@ _EPILOG = """Examples:
   fogbayes batch runs/ --model bias-t --engine dask --address tcp://10.0.0.5:8786 --out fits/
 
   fogbayes batch runs/ --model thermal --orders 2 --vectorize --out fits/ --json -
+
+  fogbayes batch next_runs/ -m bias-t --task compensate --params loop.json --out comp/
 """
 
 
@@ -57,6 +59,9 @@ def batch(
     max_steps: int = typer.Option(5, "--max-steps", min=0, help="Loop: add at most this many effects."),
     alpha: float = typer.Option(0.01, help="Loop: family-wise false-effect level of each step."),
     seed: int = typer.Option(0, help="Seed of samplers and bootstrap draws."),
+    params: Path = typer.Option(None, "--params", "-p",
+                                help="Task compensate: apply this fit or loop document to "
+                                     "every recording instead of fitting each."),
     json_out: str = typer.Option(None, "--json", help="Also write the summary here ('-' = stdout)."),
     column: str = COLUMN_OPT,
     time_column: str = TIME_COLUMN_OPT,
@@ -90,7 +95,8 @@ def batch(
     if scale_factor is not None:
         finite(scale_factor, "--scale-factor", positive=True)
     opts = JobOptions(orders=orders, seed=seed, fit_options=parse_option_pairs(option),
-                      load=load, bayes=bayes, max_steps=max_steps, alpha=alpha)
+                      load=load, bayes=bayes, max_steps=max_steps, alpha=alpha,
+                      params=_calibration(params, task, model, vectorize))
     where = f"dask ({address or f'local cluster, {workers} workers'})" if engine == "dask" else engine
     files = find_recordings(folder, pattern)  # bad folder/pattern: exit 2 right away
     n_files = len(files)
@@ -113,3 +119,26 @@ def batch(
         f"{summary['seconds']:.1f} s on {where}; wrote {Path(out) / 'summary.json'}")
     if summary["n_error"]:
         raise typer.Exit(1)
+
+
+def _calibration(params: Path | None, task: str, model: str, vectorize: bool) -> dict | None:
+    """The validated document ``--params`` names (one line and exit 2 for what cannot be)."""
+    if params is None:
+        return None
+    from ..data.axes_doc import is_axes_document
+    from ..data.documents import read_calibration
+    from ..errors import FogbayesError
+
+    if task != "compensate" or vectorize:
+        raise FogbayesError("--params applies one calibration with --task compensate",
+                            column="--params", fix="use --task compensate (without "
+                            "--vectorize), or drop --params to fit every recording")
+    doc = read_calibration(params)
+    if is_axes_document(doc) or doc.get("model") != model or model in ("allan", "arma"):
+        what = "a multi-axis document" if is_axes_document(doc) else \
+            f"a '{doc.get('model')}' document"
+        raise FogbayesError(f"{what} cannot compensate model '{model}' recordings",
+                            file=str(params), column="--params",
+                            fix="pass the document of one axis of a bias-t, thermal or "
+                                "composite model, and the same --model")
+    return doc
