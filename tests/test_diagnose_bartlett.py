@@ -17,12 +17,7 @@ import itertools
 
 import numpy as np
 
-from fogbayes.diagnose.bartlett import (
-    BATCH_SEED,
-    bartlett_factor,
-    in_walk_mode,
-    null_ratios,
-)
+from fogbayes.diagnose.bartlett import BATCH_SEED, bartlett_factor, in_walk_mode
 from fogbayes.diagnose.candidates import candidates_for
 from fogbayes.diagnose.context import make_context
 from fogbayes.diagnose.fitting import fit_terms
@@ -46,15 +41,30 @@ def test_the_factor_is_near_one_for_a_regular_ratio():
     assert 1.0 <= c < 2.0
 
 
-def test_the_sequential_factor_stops_when_settled_and_averages_every_batch_when_open():
-    ctx, base, alt = _white_record_with_drift()
-    kw = {"n_sims": 5, "seed": 3}  # this checks the bookkeeping, not the value
-    first = bartlett_factor(ctx, base, alt, 1, **kw)
-    assert bartlett_factor(ctx, base, alt, 1, decide=lambda c: True, **kw) == first
+def test_the_sequential_factor_stops_when_settled_and_averages_every_batch_when_open(
+        monkeypatch):
+    # Bookkeeping, not values: seeded stand-in ratios (the real ones are the test above),
+    # so each batch's seed and the average over batches can be checked exactly.
+    from fogbayes.diagnose import bartlett
+
+    seeds = []
+
+    def fake(ctx, base, alt, n_sims, *, seed):
+        seeds.append(seed)
+        return np.random.default_rng(seed).chisquare(1, n_sims) * 3.0
+
+    monkeypatch.setattr(bartlett, "null_ratios", fake)
+    kw = {"n_sims": 5, "seed": 3}
+    first = bartlett.bartlett_factor(None, None, None, 1, **kw)
+    assert seeds == [3]  # without a decision: one batch
+    assert bartlett.bartlett_factor(None, None, None, 1, decide=lambda c: True, **kw) == first
+    assert seeds == [3, 3]  # a settled decision: the first batch alone
+    seeds.clear()
     flips = itertools.cycle([True, False])  # never the same at both ends: always open
-    c = bartlett_factor(ctx, base, alt, 1, n_max=10, decide=lambda c: next(flips), **kw)
-    ratios = np.concatenate([null_ratios(ctx, base, alt, 5, seed=3 + BATCH_SEED * b)
-                             for b in range(2)])
+    c = bartlett.bartlett_factor(None, None, None, 1, n_max=10, decide=lambda c: next(flips),
+                                 **kw)
+    assert seeds == [3, 3 + BATCH_SEED]  # two batches, the second seeded apart
+    ratios = np.concatenate([fake(None, None, None, 5, seed=s) for s in list(seeds)])
     assert c == max(1.0, float(ratios.mean())) != first
 
 
