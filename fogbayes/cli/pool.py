@@ -8,10 +8,10 @@ import typer
 
 from ._app import app
 from ._common import (AXIS_OPT, COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
-                      TIME_COLUMN_OPT, TIME_UNIT_OPT, channels, load_recording, progress,
-                      refuse_overwrite, say, write_json)
+                      TEMPERATURE_OPT, TIME_COLUMN_OPT, TIME_UNIT_OPT, channels, load_recording,
+                      progress, refuse_overwrite, say, write_json)
 
-_MODELS = ("allan",)
+_MODELS = ("allan", "bias-t")
 
 
 def recording_paths(paths: list[Path]) -> list[Path]:
@@ -66,7 +66,11 @@ def pool(
                                                  "folders of them."),
     json_out: str = typer.Option(..., "--json", help="Pool document to write ('-' = stdout)."),
     model: str = typer.Option("allan", "--model", "-m", help="What to pool: allan (the "
-                              "five-term noise model)."),
+                              "five-term noise model) or bias-t (the bias law in T)."),
+    order: int = typer.Option(2, "--order", min=1, max=4,
+                              help="bias-t: order of the bias law in T."),
+    t_ref: float = typer.Option(20.0, "--t-ref", help="bias-t: reference temperature (deg C) "
+                                "of the pooled coefficients a_k of (T - T_ref)^k."),
     terms: str = typer.Option("N,B,K", help="Noise terms to pool (of Q, N, B, K, R)."),
     report: Path = typer.Option(None, "--report", help="Also write the HTML pool report."),
     flag_level: float = typer.Option(0.01, help="Flag a unit whose leave-one-out "
@@ -80,9 +84,10 @@ def pool(
     axis: str = AXIS_OPT,
     output_unit: str = OUTPUT_UNIT_OPT,
     scale_factor: float = SCALE_FACTOR_OPT,
+    temperature: list[str] = TEMPERATURE_OPT,
     quiet: bool = QUIET_OPT,
 ):
-    """Pool the noise of several runs or units of one sensor type (hierarchical model).
+    """Pool the noise (or the bias law) of several runs or units of one sensor type.
 
     Each recording is a unit (a sensor, or one run of a sensor). Its five-term Allan fit (as 'fogbayes allan' makes it) enters a population model of log N, log B, log K: the population median with its 90 % interval, how much units differ (the between-unit spread), the range of a new unit of this type, each unit shrunk toward the population, and units outside it flagged (leave-one-out p-value below --flag-level). With several columns (--column gx,gy,gz) or axes (--axis all) each is pooled on its own.
 
@@ -91,10 +96,15 @@ def pool(
       fogbayes pool imu1.npz imu2.npz imu3.npz --column gyro_x_dps,gyro_y_dps \\
           --output-unit deg/s --json pool.json
       fogbayes pool runs/ --prior sheet.json --json pool.json
+      fogbayes pool chamber_runs/ -m bias-t --order 2 --json pool.json
+
+    With -m bias-t each unit's bias law b(T) = sum a_k (T - T_ref)^k is fitted by GLS under its noise model (as the closed loop fits it) and the coefficients are pooled: the typical unit's bias at T_ref, slope and curvature, how much units differ, a new unit's range, and outlier units.
     """
     from ..errors import ArgumentError, about_file
     from ..models.allan import TERMS
     from ..pool.allan import fit_unit, pool_allan, pool_document
+    from ..pool.thermal import fit_unit as fit_thermal
+    from ..pool.thermal import pool_thermal
 
     if model not in _MODELS:
         raise ArgumentError(f"cannot pool model '{model}'", column="--model",
@@ -108,6 +118,10 @@ def pool(
     if not 0.0 < flag_level < 1.0:
         raise ArgumentError(f"--flag-level is {flag_level:g}; it must lie in (0, 1)",
                             column="--flag-level", fix="e.g. --flag-level 0.01")
+    if model == "bias-t" and (report is not None or prior is not None or terms != "N,B,K"):
+        raise ArgumentError("--report, --prior and --terms are for noise pools (-m allan)",
+                            column="--model", fix="drop them with -m bias-t (the pool "
+                            "document holds the thermal pool)")
     files = recording_paths(paths)
     refuse_overwrite({**{f"recording {i + 1}": p for i, p in enumerate(files)},
                       "the --prior document": prior},
@@ -126,17 +140,23 @@ def pool(
         for f in files:
             recs.append(load_recording(f, time_column=time_column, time_unit=time_unit,
                                        output_unit=output_unit, scale_factor=scale_factor,
-                                       **pick))
+                                       temperature=temperature, **pick))
         names = _names(recs, files)
         for f, rec, unit_name in zip(files, recs, names):
-            with progress(f"Allan fit of {unit_name}" + ("" if name is None else f", {name}")), \
-                    about_file(f):
-                units.append(fit_unit(rec, name=unit_name))
+            with progress(f"{'bias law' if model == 'bias-t' else 'Allan fit'} of {unit_name}"
+                          + ("" if name is None else f", {name}")), about_file(f):
+                units.append(fit_thermal(rec, order=order, t_ref=t_ref, name=unit_name)
+                             if model == "bias-t" else fit_unit(rec, name=unit_name))
         with progress("pooling" + ("" if name is None else f" {name}")):
-            pools[name or column] = pool_allan(units, terms=chosen, seed=seed,
-                                               flag_level=flag_level, prior=sheet)
+            pools[name or column] = (
+                pool_thermal(units, t_ref=t_ref, seed=seed, flag_level=flag_level)
+                if model == "bias-t" else
+                pool_allan(units, terms=chosen, seed=seed, flag_level=flag_level, prior=sheet))
     doc = pool_document(pools, model=model)
     write_json(doc, json_out)
+    if model == "bias-t":
+        _say_thermal(pools)
+        return
     for name, p in pools.items():
         say(f"[{name}] {len(p['units'])} units, converged={p['converged']}")
         for t in p["terms"]:
@@ -151,3 +171,17 @@ def pool(
 
         write_pool_report(doc, report)
         say(f"wrote {report}")
+
+
+def _say_thermal(pools: dict) -> None:
+    for name, p in pools.items():
+        say(f"[{name}] {len(p['units'])} units, converged={p['converged']}, "
+            f"b(T) = sum a_k (T - {p['t_ref']:g})^k")
+        for t in p["terms"]:
+            m, s = p["population"][t]["mean"], p["population"][t]["spread_sd"]
+            say(f"  {t} population {m['value']:.4g} [{m['low']:.4g}, {m['high']:.4g}] "
+                f"{m['unit']}, units differ by sd {s['value']:.3g} [{s['low']:.3g}, "
+                f"{s['high']:.3g}]")
+        say("  flagged: " + (", ".join(p["flagged"]) or "none"))
+        for w in p["warnings"]:
+            say(f"  warning: {w}")
