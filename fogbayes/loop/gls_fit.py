@@ -27,6 +27,8 @@ from ..errors import ArgumentError
 from ..workflow.thermal import DEFAULT_ORDERS
 
 MODELS = ("bias-t", "thermal")
+#: as ``fogbayes loop``: fewer samples leave the noise model without data
+MIN_SAMPLES = 100
 
 
 def gls_orders(model: str, orders: str | None) -> str:
@@ -46,7 +48,13 @@ def gls_orders(model: str, orders: str | None) -> str:
 
 def fit_gls(rec, model: str, orders: str | None = None, *, seed: int = 0) -> dict:
     """The loop document of ``run_loop(rec, model, orders, max_steps=0)`` (module doc)."""
+    from ..errors import TooShortError
     from .core import run_loop
+
+    if rec.n < MIN_SAMPLES:
+        raise TooShortError(f"--estimator gls needs at least {MIN_SAMPLES} samples (its noise "
+                            f"model is fitted on block means), the recording has {rec.n}",
+                            file=rec.meta.source, fix="use --estimator ols on short records")
 
     return run_loop(rec, model, orders=gls_orders(model, orders), max_steps=0,
                     seed=seed).to_json()
