@@ -37,13 +37,14 @@ OUTLIER_SD = 5.0
 DEFAULT_OUT = os.path.join(HERE, "pool_thermal.json")
 
 
-def one_fleet(fleet: int, n_units: int) -> dict:
+def one_fleet(fleet: int, n_units: int, outlier_sd: float = OUTLIER_SD) -> dict:
     from fogbayes.pool.thermal import fit_unit, pool_thermal
     from fogbayes.simulate import simulate
 
     rng = np.random.default_rng(1000 + fleet)
     truth = MU + SD * rng.standard_normal((n_units, 3))
-    truth[0, 0] = MU[0] + OUTLIER_SD * SD[0]
+    if outlier_sd:
+        truth[0, 0] = MU[0] + outlier_sd * SD[0]
     t0 = time.perf_counter()
     units = []
     for u in range(n_units):
@@ -64,7 +65,7 @@ def one_fleet(fleet: int, n_units: int) -> dict:
             "mean": [pop[t]["mean"]["value"] for t in terms],
             "sq_err_single": ((single[1:] - truth[1:]) ** 2).sum(0).tolist(),
             "sq_err_pooled": ((pooled[1:] - truth[1:]) ** 2).sum(0).tolist(),
-            "outlier_flagged": doc["units"][0]["outlier"]["flagged"],
+            "outlier_flagged": doc["units"][0]["outlier"]["flagged"],  # a clean unit when outlier_sd is 0
             "false_flags": sum(r["outlier"]["flagged"] for r in doc["units"][1:]),
             "seconds_fit": t_fit, "seconds": time.perf_counter() - t0}
 
@@ -93,14 +94,17 @@ def main():
     ap.add_argument("--units", type=int, default=20)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default=DEFAULT_OUT)
+    ap.add_argument("--outlier-sd", type=float, default=OUTLIER_SD,
+                    help="unit 0's a0 offset in population sd (0: no outlier)")
     args = ap.parse_args()
     with ProcessPoolExecutor(args.workers) as ex:
-        rows = list(ex.map(one_fleet, range(args.fleets), [args.units] * args.fleets))
+        rows = list(ex.map(one_fleet, range(args.fleets), [args.units] * args.fleets,
+                           [args.outlier_sd] * args.fleets))
     summary = summarise(rows)
     from fogbayes._json import to_jsonable
 
     with open(args.out, "w") as f:
-        json.dump(to_jsonable({"MU": MU.tolist(), "SD": SD.tolist(), "outlier_sd": OUTLIER_SD,
+        json.dump(to_jsonable({"MU": MU.tolist(), "SD": SD.tolist(), "outlier_sd": args.outlier_sd,
                                "summary": summary, "rows": rows}), f, indent=1)
     print(json.dumps(summary, indent=1))
 
