@@ -7,7 +7,8 @@ Each fleet: ``--units`` sensors of one type, each a 1 h, 1 Hz generic chamber te
 (``simulate("thermal")``: -20..60 deg C, the scenario's noise N 0.005, B 0.02, K 0.02) whose
 bias law is ``a0 + a1 (T - 20) + a2 (T - 20)^2`` with (a0, a1, a2) drawn from the population
 N(MU, diag(SD^2)); SD is of the order of one unit's own standard errors, so pooling has
-something to do. Unit 0 of every fleet is an outlier: its a0 is MU + OUTLIER_SD x SD. Each
+something to do. Unit 0 of every fleet is an outlier: its a0 is MU + OUTLIER_SD x SD
+(``--outlier-sd``; 0: no outlier, the fleets for the population's coverage). Each
 unit is fitted by :func:`fogbayes.pool.thermal.fit_unit` (GLS under its noise model), the
 fleet pooled by :func:`fogbayes.pool.thermal.pool_thermal`.
 

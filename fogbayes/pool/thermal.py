@@ -37,11 +37,11 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from ..errors import FogbayesError
+from ..inference.allan_fit import Z90
 
 CI = 0.9
 FLAG_LEVEL = 0.01
 T_REF = 20.0
-Z90 = 1.6448536269514722
 
 
 def names(order: int) -> list[str]:
