@@ -55,7 +55,7 @@ def _record(case: dict):
 
     return make_record(case["effect"], seed=case["seed"], duration=case["duration"],
                        fs=case["fs"], magnitude=case["magnitude"], noise=case["noise"],
-                       profile=case["profile"])
+                       profile=case["profile"], segments=case.get("segments"))
 
 
 def loop_row(case: dict, res, wall: float) -> dict:

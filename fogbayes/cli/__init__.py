@@ -30,7 +30,7 @@ def _root(quiet: bool = typer.Option(False, "--quiet", "-q",
 
 
 # Subcommands register themselves on import (order = order in --help).
-from . import allan, arma, batch, compensate, demo, export, fit, info, loop, plan, pool, prior, report, simulate  # noqa: E402,F401
+from . import allan, arma, batch, compensate, demo, export, fit, info, loop, plan, plan_chamber, pool, prior, report, simulate  # noqa: E402,F401
 
 
 class Terminated(SystemExit):

@@ -58,14 +58,16 @@ def _scaled(name: str, magnitude: float, params: dict | None) -> dict:
 def make_record(effect: str | None = None, *, seed: int, duration: float = 3 * 3600.0,
                 fs: float = 10.0, magnitude: float = 1.0, noise: str | dict = "default",
                 effect_params: dict | None = None, temp_noise: float = 0.01,
-                profile: str = "thermal") -> TestRecord:
+                profile: str = "thermal", segments=None) -> TestRecord:
     """A simulated recording with ``effect`` present (None: clean) on top of the scenario.
 
     profile: "thermal" (generic heating/cooling test), "paper004" (room, -40, +60, room at
     1 deg C/min, soaks sized to ``duration``; its Shupe term is switched off so that the
     declared model is the quadratic bias) or "ratetable" (paper 000's grid).
+    segments: a chamber programme (Soak/Ramp from 20 deg C) for profile "thermal" instead of
+    the generic test; the record then lasts ``duration`` s (the end held).
     """
-    opts: dict = {}
+    opts: dict = {} if segments is None else {"segments": segments}
     effects: dict = {}
     if profile == "paper004":
         opts = {"soak": max((duration - 12000.0) / 4.0, 600.0), "ramp_rate": 1.0}

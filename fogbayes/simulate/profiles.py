@@ -89,6 +89,33 @@ def time_grid(duration: float, fs: float) -> np.ndarray:
     return np.arange(n) / fs
 
 
+def as_segments(segments: Sequence) -> list:
+    """Soak/Ramp segments from themselves or from their JSON form (see :func:`segments_json`)."""
+    out = []
+    for j, seg in enumerate(segments):
+        if isinstance(seg, (Soak, Ramp)):
+            out.append(seg)
+        elif isinstance(seg, dict) and set(seg) == {"soak", "duration"}:
+            out.append(Soak(float(seg["soak"]), float(seg["duration"])))
+        elif isinstance(seg, dict) and set(seg) == {"ramp", "rate"}:
+            out.append(Ramp(float(seg["ramp"]), float(seg["rate"])))
+        else:
+            raise SimulationParameterError(
+                f"segment {j} is {seg!r}", column="segments",
+                fix='give Soak/Ramp or {"soak": deg_C, "duration": s} / '
+                    '{"ramp": to_deg_C, "rate": deg_C_per_min}')
+    if not out:
+        raise SimulationParameterError("the programme has no segment", column="segments",
+                                       fix="give at least one Soak or Ramp")
+    return out
+
+
+def segments_json(segments: Sequence) -> list[dict]:
+    """The JSON form of a programme: ``{"soak": T, "duration": s}``, ``{"ramp": to, "rate": r}``."""
+    return [{"soak": s.temperature, "duration": s.duration} if isinstance(s, Soak)
+            else {"ramp": s.to, "rate": s.rate} for s in as_segments(segments)]
+
+
 def segment_knots(segments: Sequence, *, start: float) -> tuple[np.ndarray, np.ndarray]:
     """Knot times (s) and temperatures (deg C) of a piecewise-linear chamber programme."""
     times, temps = [0.0], [float(start)]

@@ -67,9 +67,17 @@ def _input(omega, n) -> np.ndarray | None:
     return None if omega is None else np.broadcast_to(np.asarray(omega, float), (n,)).copy()
 
 
-def _thermal(fs, duration, *, lags=(300.0, 900.0), input_rate=None, **levels) -> _Base:
-    p = pf.thermal_test_profile(fs=fs or 10.0, duration=duration or 6.3 * 3600.0, lags=lags,
-                                **levels)
+def _thermal(fs, duration, *, lags=(300.0, 900.0), input_rate=None, segments=None,
+             **levels) -> _Base:
+    if segments is None:  # the generic heating/cooling test, sized to the duration
+        p = pf.thermal_test_profile(fs=fs or 10.0, duration=duration or 6.3 * 3600.0,
+                                    lags=lags, **levels)
+    else:  # a given chamber programme (Soak/Ramp segments from ``levels["room"]``)
+        segments = pf.as_segments(segments)
+        p = pf.thermal_profile(segments, fs=fs or 10.0, start=levels.get("room", 20.0),
+                               lags=lags, duration=duration)
+        duration = p.time[-1] + 1.0 / (fs or 10.0)
+        levels = {**levels, "segments": pf.segments_json(segments)}
     cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size))
     return _Base(cov, p.names, {}, {"temperature_order": {"coeffs": [0.5, 0.01, 2e-4],
                                                           "T_ref": 20.0}},
