@@ -59,12 +59,19 @@ def _lines(doc: dict) -> list[str]:
            f"noise from {s['noise_from']}",
            f"  best programme: {a['name']}",
            "  " + " -> ".join(_seg(g) for g in a["segments"]),
-           f"  {'pair':58s} {'noncentrality':>22s} {'P(loop tells them apart)':>26s}",
-           f"  {'':58s} {b['name'][:10]:>10s} {'best':>10s}  {b['name'][:10]:>11s} {'best':>10s}"]
+           f"  compared with (before): {b['name']}",
+           f"  {'pair':58s} {'noncentrality':>21s} {'P(duel rejects the rival)':>26s}",
+           f"  {'':58s} {'before':>10s} {'best':>10s}  {'before':>11s} {'best':>10s}"]
     for lab in a["noncentrality"]:
         pw = lambda d: "-" if d["power"][lab] is None else f"{d['power'][lab]:.3f}"
         out.append(f"  {lab:58s} {b['noncentrality'][lab]:10.3g} {a['noncentrality'][lab]:10.3g}"
                    f"  {pw(b):>11s} {pw(a):>10s}")
+    if min(a["noncentrality"].values()) <= min(b["noncentrality"].values()):
+        out.append(f"  no searched cycle separates the pairs better than {b['name']}: keep it")
+    weak = [lab for lab, p in a["power"].items() if p is not None and p < 0.8]
+    if weak:
+        out.append(f"  warning: even the best programme leaves {', '.join(weak)} below 0.8: "
+                   "record longer, or the effect is smaller than the loop can attribute")
     return out
 
 
@@ -159,8 +166,12 @@ def plan_chamber(
             [Pair("thermal_lag", "temperature_rate", lag_coeff, t) for t in taus] + \
             [Pair("temperature_rate", "thermal_lag", rate_coeff),
              Pair("temperature_rate", "temperature_gradient", rate_coeff)]
-        plan = plan_programme(nz, pairs, duration=dur, fs=rate, lags=lag_s, low=low, high=high,
-                              room=room, max_rate=max_rate, baseline=baseline)
+        try:
+            plan = plan_programme(nz, pairs, duration=dur, fs=rate, lags=lag_s, low=low,
+                                  high=high, room=room, max_rate=max_rate, baseline=baseline)
+        except ValueError as exc:
+            raise ArgumentError(str(exc), column="--max-rate/--hours",
+                                fix="allow faster ramps or plan a longer record") from None
     doc = plan.to_json()
     doc["settings"]["noise_from"] = source
     lines = _lines(doc)

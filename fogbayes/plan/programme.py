@@ -249,7 +249,7 @@ def plan_programme(noise, pairs: Sequence[Pair], *, duration: float, fs: float,
                    lags: Sequence[float] = (300.0, 900.0), low: float = -20.0,
                    high: float = 60.0, room: float = 20.0, max_rate: float = 5.0,
                    baseline: list | None = None, seed: int = 0) -> ChamberPlan:
-    """Score every candidate programme; the best maximises the worst pair's noncentrality.
+    """Score every candidate cycle; the best maximises the worst pair's noncentrality.
 
     ``noise``: a :class:`~fogbayes.inference.noise_ssm.NoiseFit` on blocks of a record of
     this ``duration`` and ``fs`` (:func:`noise_for_plan`);
@@ -257,16 +257,20 @@ def plan_programme(noise, pairs: Sequence[Pair], *, duration: float, fs: float,
     """
     kw = dict(duration=duration, fs=fs, lags=lags, room=room)
     progs = candidates(duration=duration, low=low, high=high, room=room, max_rate=max_rate)
+    base_name, base_segs = "generic test", progs.pop("generic test")
     if baseline is not None:
-        progs = {"your programme": baseline, **{k: v for k, v in progs.items()
-                                                if k != "generic test"}}
+        base_name, base_segs = "your programme", baseline
+    if not progs:
+        raise ValueError(f"no candidate programme: ramps of at most {max_rate:g} deg C/min "
+                         f"and soaks shorter than half of {duration:g} s")
     scores = [score(n, s, pairs, noise, **kw) for n, s in progs.items()]
-    base_name = next(iter(progs))
     best = max(scores, key=lambda s: s.worst)
-    with_power = {s.name: score(s.name, progs[s.name], pairs, noise, power=True, seed=seed, **kw)
-                  for s in (best, scores[0])}
+    # the baseline is only compared with (it may break --max-rate: the generic test's ramps
+    # are sized to the record); the duel's power is simulated for the two shown
+    before = score(base_name, base_segs, pairs, noise, power=True, seed=seed, **kw)
+    best = score(best.name, progs[best.name], pairs, noise, power=True, seed=seed, **kw)
     settings = dict(duration_s=duration, fs_hz=fs, lags_s=list(lags), low=low, high=high,
                     room=room, max_rate_deg_c_per_min=max_rate, alpha=0.05,
                     rule="max over programmes of min over pairs of the noncentrality")
-    return ChamberPlan(with_power[best.name], with_power[base_name],
-                       sorted(scores, key=lambda s: -s.worst), list(pairs), settings)
+    return ChamberPlan(best, before, sorted(scores, key=lambda s: -s.worst), list(pairs),
+                       settings)
