@@ -109,3 +109,18 @@ def test_plan_chamber_refuses_bad_arguments(args, flag, capsys):
     assert main(["plan-chamber", *args]) == 2
     err = capsys.readouterr().err
     assert flag in err and "Traceback" not in err
+
+
+def test_the_loop_points_an_undecided_thermal_duel_to_the_planner():
+    from types import SimpleNamespace as NS
+
+    from fogbayes.cli.loop import undecided
+
+    lag = NS(effect="temperature_gradient",
+             evidence={"alternatives": [{"effect": "thermal_lag"}]})
+    step = NS(effect="step", evidence={"alternatives": [{"effect": "time_drift"}]})
+    plain = NS(effect="periodic", evidence={})
+    lines = undecided([lag, step, plain])
+    assert len(lines) == 2
+    assert "thermal_lag" in lines[0] and "plan-chamber" in lines[0]
+    assert "time_drift" in lines[1] and "plan-chamber" not in lines[1]

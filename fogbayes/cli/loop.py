@@ -26,6 +26,23 @@ from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 LOOP_MIN_SAMPLES = 100
 
 
+#: Effects whose confusions a chamber programme can resolve (fogbayes.plan.programme).
+THERMAL_PAIRS = {"thermal_lag", "temperature_gradient", "temperature_rate"}
+
+
+def undecided(steps) -> list[str]:
+    """One line per step whose duel the data could not decide, with the way out when a
+    chamber programme can decide it (docs/plan.md)."""
+    out = []
+    for step in steps:
+        alts = [a["effect"] for a in step.evidence.get("alternatives", [])]
+        if alts:
+            hint = (" (fogbayes plan-chamber proposes a chamber programme that separates them)"
+                    if {step.effect, *alts} <= THERMAL_PAIRS else "")
+            out.append(f"undecided: {step.effect} kept (fewer searched parameters); the data "
+                       f"cannot tell it from {', '.join(alts)}{hint}")
+    return out
+
 @app.command(name="loop")
 def loop(
     rec_path: Path = REC_ARG,
@@ -128,6 +145,8 @@ def loop(
         say(f"not kept: {r['effect']} (supported, but held-out time blocks predicted worse)")
     for w in res.warnings:
         say(f"warning: {w}")
+    for line in undecided(res.steps):
+        say(line)
     if res.unexplained:  # structure no candidate names: say so where the user looks first
         kinds = sorted({u["kind"] for u in res.unexplained})
         say(f"unexplained: {', '.join(kinds)} (see 'unexplained' in the JSON)")

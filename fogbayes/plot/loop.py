@@ -215,7 +215,11 @@ def loop_section(res):
                 f"{a['effect']} (2 dlogL alt - chosen "
                 f"{a['d_2loglik_alternative_minus_chosen']:+.3g}, d ELPD "
                 f"{a['elpd_diff_chosen_minus_alternative']:.3g} +- {a['elpd_diff_se']:.3g})"
-                for a in e["alternatives"]), ok=False)
+                for a in e["alternatives"]) + (
+                ". A chamber programme that separates them: fogbayes plan-chamber (docs/plan.md)"
+                if {s.effect, *(a["effect"] for a in e["alternatives"])} <= {
+                    "thermal_lag", "temperature_gradient", "temperature_rate"} else ""),
+                ok=False)
         sec.table(["candidate effect", "screening 2 dlogL", "log10 p", "log10 p, family-wise"],
                   [[r["effect"], r["screen_lr"], Cell(fmt(r["log10_p"], sig=3)),
                     Cell(fmt(r["log10_p_familywise"], sig=3))]
