@@ -81,6 +81,7 @@ def one_rep(rep, args):
                            "sse_pooled": float(np.sum((pooled - true) ** 2)),
                            "pooled_covered": int(sum(cover))}
     out["false_flags"] = int(sum(u["outlier"]["flagged"] for u in doc["units"]))
+    out["clean_p"] = [float(u["outlier"]["p"]) for u in doc["units"]]  # for other flag levels
     out["unresolved"] = sum(w.startswith(tuple(TERMS)) for w in doc["warnings"])
     bad = dict(truths[0])
     bad["K"] = bad["K"] * args.outlier_k
@@ -89,6 +90,7 @@ def one_rep(rep, args):
     out["outlier_flagged"] = bool(doc2["units"][0]["outlier"]["flagged"])
     out["outlier_p"] = float(doc2["units"][0]["outlier"]["p"])
     out["false_flags_with_outlier"] = int(sum(u["outlier"]["flagged"] for u in doc2["units"][1:]))
+    out["beside_p"] = [float(u["outlier"]["p"]) for u in doc2["units"][1:]]
     return out
 
 
@@ -109,6 +111,12 @@ def summarise(rows, args) -> dict:
     s["false_flag_rate"] = sum(r["false_flags"] for r in rows) / (R * U)
     s["false_flag_rate_beside_outlier"] = sum(r["false_flags_with_outlier"] for r in rows) / (R * (U - 1))
     s["outlier_detection"] = float(np.mean([r["outlier_flagged"] for r in rows]))
+    if all("clean_p" in r for r in rows):  # the operating curve: detection vs false flags
+        clean = np.concatenate([r["clean_p"] for r in rows])
+        out_p = np.array([r["outlier_p"] for r in rows])
+        s["operating"] = {str(lv): {"detection": float(np.mean(out_p < lv)),
+                                    "false_flag_rate": float(np.mean(clean < lv))}
+                          for lv in (0.001, 0.005, 0.01, 0.02, 0.05)}
     return s
 
 
@@ -127,6 +135,9 @@ def main():
         rows.append(one_rep(rep, args))
         if (rep + 1) % 10 == 0:
             print(f"{rep + 1} reps, {time.perf_counter() - t0:.0f} s", flush=True)
+            if args.out:  # a run cut short keeps its rows
+                with open(args.out, "w") as fh:
+                    json.dump({"rows": rows}, fh, default=float)
     s = summarise(rows, args)
     s["seconds"] = time.perf_counter() - t0
     print(json.dumps(s, indent=1, default=float))
