@@ -124,7 +124,7 @@ def _columns(ctx, pairs: Sequence[Pair]) -> tuple[np.ndarray, dict]:
            "temperature_rate": [Term("rate", {"scale": 1.0})]}
     truth = {p.label: (lag(p.tau) if p.truth == "thermal_lag" else fam[p.truth][0])
              for p in pairs}
-    blocks, index, at = [ctx.block_design(base)], {}, 0
+    blocks, index = [ctx.block_design(base)], {}
     at = blocks[0].shape[1]
     for name, terms in list(fam.items()) + [(k, [v]) for k, v in truth.items()]:
         blocks.append(ctx.block_design(terms))
