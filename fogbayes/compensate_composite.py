@@ -119,9 +119,32 @@ def _poly(coefs, w):
     return out
 
 
+def _solve(S, y, w, lo, hi, *, method: str, iterations: int):
+    """Iterate ``method`` on g(w) = w P(w) - y from the start ``w`` (scaled units); NaN
+    where the output cannot be inverted. ``lo``/``hi``: the monotone box, scalars or one
+    per sample."""
+    if method != "paper":
+        w = jnp.clip(w, lo, hi)
+    # A static, small, unrolled loop (not lax.scan) so that XLA fuses the chain into a few
+    # elementwise loops.
+    for _ in range(iterations):
+        w = _step(method, S, y, w)
+        if method != "paper":
+            w = jnp.clip(w, lo, hi)
+    if method == "paper":  # the baseline stops early by design: no convergence test
+        return w
+    # Invertible: inside the monotone box and actually solved (an output the model cannot
+    # produce leaves a large residual even when the iterate stayed inside the box). The
+    # verdict is folded into the rate as NaN: returning a separate flag from the same
+    # computation made XLA CPU 4-5x slower in every variant tried.
+    resid = jnp.abs(w * _poly(S, w) - y)
+    ok = (w > lo) & (w < hi) & (resid <= RESID_ABS + RESID_REL * jnp.abs(y))
+    return jnp.where(ok, w, jnp.nan)
+
+
 def _rate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str, iterations: int,
           recip=None):
-    """Rate in deg/s, NaN where the output cannot be inverted (one output: see below).
+    """Rate in deg/s, NaN where the output cannot be inverted (one output: see _solve).
 
     ``recip``: coefficients of a polynomial in T' approximating 1 / S_0(T) (see
     :func:`reciprocal_poly`); the linear starting guess then costs no division. The
@@ -134,23 +157,30 @@ def _rate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str, iterations: 
     else:
         Tp = (T - sc.T_ref) * (1.0 / sc.T_scale)
         w = y * _horner(jnp.asarray(recip, y.dtype), Tp)
-    if method != "paper":
-        w = jnp.clip(w, lo, hi)
-    # A static, small, unrolled loop (not lax.scan) so that XLA fuses the chain into a few
-    # elementwise loops.
-    for _ in range(iterations):
-        w = _step(method, S, y, w)
-        if method != "paper":
-            w = jnp.clip(w, lo, hi)
-    if method == "paper":  # the baseline stops early by design: no convergence test
-        return w * sc.W_scale
-    # Invertible: inside the monotone box and actually solved (an output the model cannot
-    # produce leaves a large residual even when the iterate stayed inside the box). The
-    # verdict is folded into the rate as NaN: returning a separate flag from the same
-    # computation made XLA CPU 4-5x slower in every variant tried.
-    resid = jnp.abs(w * _poly(S, w) - y)
-    ok = (w > lo) & (w < hi) & (resid <= RESID_ABS + RESID_REL * jnp.abs(y))
-    return jnp.where(ok, w * sc.W_scale, jnp.nan)
+    return _solve(S, y, w, lo, hi, method=method, iterations=iterations) * sc.W_scale
+
+
+@partial(jax.jit, static_argnames=("method", "iterations"))
+def _solve_from_linear(S, y, lo, hi, *, method: str, iterations: int):
+    return _solve(list(S), y, y / S[0], lo, hi, method=method, iterations=iterations)
+
+
+def invert_polynomial(S, y, *, method: str = "halley", iterations: int = 6,
+                      margin: float = 0.02, limit: float = 10.0) -> np.ndarray:
+    """Solve w P(w) = y per sample, P(w) = sum_j S[:, j] w^j, with coefficients of its own
+    for every sample (scaled units: y and w of order 1 at full scale).
+
+    The same iteration as the family's :class:`Compensator` (``method``, clamped into each
+    sample's monotone box :func:`monotone_bounds`, started from the linear guess y / S_0),
+    for models whose coefficients depend on more than the temperature (the closed loop's
+    composite calibrations). NaN where no inverse lies in the box. Compiled once per shape
+    and number of coefficients: the coefficients are arguments.
+    """
+    S = np.asarray(S, float)
+    lo, hi = monotone_bounds(S, margin=margin, limit=limit)
+    w = _solve_from_linear(tuple(S.T), np.asarray(y, float), lo, hi, method=method,
+                           iterations=int(iterations))
+    return np.asarray(w)
 
 
 def _result(p, sc, box, U, T, t, *, method, iterations, recip=None):
@@ -223,27 +253,47 @@ def compensate_draws(p_draws: FullParams, sc: Scaling, box, U, T, t, *, key,
 
 
 # ------------------------------------------------------------------------------ build time
+def monotone_bounds(S, *, margin: float = 0.02, limit: float = 10.0):
+    """Per row of S (n, K): the largest (lo, hi) around 0 where d/dw [w P(w)] keeps its sign.
+
+    The derivative sum_j (j+1) S_j w^j is a polynomial in w; its real roots nearest to 0 on
+    each side (eigenvalues of the companion matrices, all rows at once) bound the
+    invertible region. ``margin`` keeps a little away from the fold; ``limit`` caps it.
+    """
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    n, k = S.shape
+    lo, hi = np.full(n, -float(limit)), np.full(n, float(limit))
+    if k > 1:
+        der = S * (np.arange(k) + 1.0)
+        size = np.maximum(np.max(np.abs(der), axis=1), 1e-300)
+        lead = der[:, -1]
+        # a vanishing leading coefficient (e.g. a T' factor at T = centre) stands in as a
+        # tiny one: its extra root lies far outside any box, the others barely move
+        tiny = 1e-12 * size
+        lead = np.where(np.abs(lead) < tiny, np.where(lead < 0, -tiny, tiny), lead)
+        comp = np.zeros((n, k - 1, k - 1))
+        comp[:, 0, :] = -der[:, -2::-1] / lead[:, None]
+        if k > 2:
+            idx = np.arange(k - 2)
+            comp[:, idx + 1, idx] = 1.0
+        roots = np.linalg.eigvals(comp)
+        real = np.abs(roots.imag) < 1e-9 * np.maximum(1.0, np.abs(roots))
+        r = np.where(real, roots.real, np.nan)
+        hi = np.fmin(hi, np.nanmin(np.where(r > 0, r, np.inf), axis=1))
+        lo = np.fmax(lo, np.nanmax(np.where(r < 0, r, -np.inf), axis=1))
+    return lo * (1 - margin), hi * (1 - margin)
+
+
 def monotone_box(p: FullParams, T_range: tuple[float, float], sc: Scaling, *,
                  margin: float = 0.02, limit: float = 10.0, n_T: int = 41) -> tuple[float, float]:
-    """Largest (lo, hi) around 0 in scaled rate where d/dW [W P(W)] keeps its sign at all T.
-
-    The derivative sum_j (j+1) S_j(T) W^j is a polynomial in W; its real roots nearest to
-    0 on each side, over a grid of temperatures, bound the invertible region. ``margin``
-    keeps a little away from the fold; ``limit`` caps the box (in units of W_scale).
-    """
+    """Largest (lo, hi) around 0 in scaled rate where d/dW [W P(W)] keeps its sign at all T
+    (:func:`monotone_bounds` over a grid of ``n_T`` temperatures in ``T_range``)."""
     M = np.asarray(p.M, dtype=float)
     Tp = (np.linspace(*T_range, n_T) - sc.T_ref) / sc.T_scale
-    lo, hi = -limit, limit
-    for x in Tp:
-        S = np.array([np.polyval(M[::-1, j], x) for j in range(M.shape[1])])
-        der = (np.arange(M.shape[1]) + 1) * S
-        roots = np.roots(der[::-1]) if M.shape[1] > 1 else np.array([])
-        real = roots[np.abs(roots.imag) < 1e-9 * np.maximum(1, np.abs(roots))].real
-        if np.any(real > 0):
-            hi = min(hi, real[real > 0].min())
-        if np.any(real < 0):
-            lo = max(lo, real[real < 0].max())
-    return float(lo * (1 - margin)), float(hi * (1 - margin))
+    S = np.stack([np.polynomial.polynomial.polyval(Tp, M[:, j]) for j in range(M.shape[1])],
+                 axis=1)
+    lo, hi = monotone_bounds(S, margin=margin, limit=limit)
+    return float(np.max(lo)), float(np.min(hi))
 
 
 def compensate_numpy(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",

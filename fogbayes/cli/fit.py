@@ -138,6 +138,7 @@ def fit(
     json_out: str = typer.Option(..., "--json", help="Fit document to write ('-' = stdout)."),
     orders: str = typer.Option(None, "--orders", "--order",
                                help="Order(s): bias-t '3' or '1-4'; thermal '2,2' or '1-3,1-2'; "
+                                    "composite 's1,s2,u0[,u1]' (three values: u1 = u0); "
                                     "'auto' selects by the RMS criterion."),
     bayes: bool = typer.Option(False, "--bayes", help="Also compute the posterior (NUTS)."),
     seed: int = typer.Option(0, help="Seed of the posterior sampler."),

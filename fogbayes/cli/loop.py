@@ -56,7 +56,8 @@ def loop(
     orders: str = typer.Option(None, "--orders", "--order",
                                help="Base orders: bias-t 'n' (default 2); thermal 'n' or "
                                     "'n,m' (T, dT/dt; default 2); composite "
-                                    "'s1,s2,u0[,u1]' (default 0,0,2)."),
+                                    "'s1,s2,u0[,u1]' as fit's (three values: u1 = u0; u1 "
+                                    "'-': no U1(T) t drift; default 0,0,2,-)."),
     alpha: float = typer.Option(0.01, help="Family-wise false-effect level of each step."),
     seed: int = typer.Option(0, help="Seed of the bootstrap calibration and ELPD draws."),
     noise_prior: Path = typer.Option(

@@ -72,6 +72,13 @@ class Kind:
     def labels(self, p: dict) -> list[str]:
         return [self.name]
 
+    def rate_powers(self, p: dict) -> list[tuple[int, bool]]:
+        """Per column, how it depends on the input rate W: (m, absolute) for a column equal
+        to its value at W = ``p["scale"]`` times (W / scale)^m, or |W / scale|^m when
+        ``absolute``; m = 0 for a column that does not depend on W. The composite family
+        inverts its model through this (:mod:`fogbayes.loop.compensate`)."""
+        return [(0, False)] * self.n_cols(p)
+
     def describe(self, p: dict, beta, se, t0: float) -> dict[str, Any]:
         """Physical reading of the fitted coefficients (deg/h and the driver's own unit)."""
         return {"coefficients_scaled": {lab: _coef(b, s) for lab, b, s in
@@ -242,6 +249,9 @@ class OmegaPoly(Kind):
     def labels(self, p):
         return [f"W'^{e}" for e in p["powers"]]
 
+    def rate_powers(self, p):
+        return [(int(e), False) for e in p["powers"]]
+
 
 class OmegaAbs(Kind):
     name = "omega_abs"
@@ -249,6 +259,9 @@ class OmegaAbs(Kind):
 
     def columns(self, p, cov):
         return (np.abs(cov.omega) / p["scale"])[:, None]
+
+    def rate_powers(self, p):
+        return [(1, True)]
 
 
 class OmegaTPoly(Kind):
@@ -263,6 +276,9 @@ class OmegaTPoly(Kind):
 
     def labels(self, p):
         return [f"W' T'^{e}" for e in p["powers"]]
+
+    def rate_powers(self, p):
+        return [(int(p.get("wpower", 1)), False)] * len(p["powers"])
 
 
 class DriftTPoly(Kind):

@@ -4,8 +4,11 @@
     thermal    bias-t + sum_{j<=m} d_j (dT/dt)'^j                 (paper 004, eq. 14; m = 2)
     composite  U = S1(T) S2(W) W + U0(T) [+ U1(T) t]  linearised  (paper 000); orders
                "s1,s2,u0[,u1]" give W' T'^i (i <= s1), W'^(j+1) (j <= s2), T'^i (i <= u0),
-               t' T'^i (i <= u1). Default "0,0,2": a linear scale factor and a quadratic
-               bias, so every scale-factor effect is something the loop can find.
+               t' T'^i (i <= u1); the grammar of ``fogbayes fit -m composite``
+               (:func:`fogbayes.models.composite.read_orders`): three values set u1 = u0,
+               u1 = "-" leaves the drift term out. Default "0,0,2,-": a linear scale
+               factor and a quadratic bias, so every scale-factor effect is something the
+               loop can find.
     allan      a constant bias; the noise model (white + flicker + random walk) is the
                five-term model, and the loop may add only noise terms: a Gauss-Markov
                component or a sinusoid (``markov_noise``, ``periodic``).
@@ -35,6 +38,7 @@ from ..diagnose.candidates import EFFECTS
 from ..diagnose.context import Context
 from ..diagnose.terms import Term
 from ..errors import FogbayesError, MissingColumnError
+from ..models.composite import OrdersError, read_orders
 
 MODELS = ("bias-t", "thermal", "composite", "allan")
 
@@ -66,19 +70,26 @@ def _need_temperature(ctx: Context, model: str, source) -> None:
 def parse_orders(model: str, orders: str | None) -> tuple[int, ...]:
     """Orders for a base model: bias-t "n" (T order); thermal "n" or "n,m" (T order, dT/dt
     order; "n" sets both, as ``fogbayes fit``); composite "s1,s2,u0[,u1]"."""
-    default = {"bias-t": (2,), "thermal": (2, 2), "composite": (0, 0, 2), "allan": ()}[model]
+    default = {"bias-t": (2,), "thermal": (2, 2), "composite": (0, 0, 2, None),
+               "allan": ()}[model]
     if orders is None:
         return default
+    if model == "composite":
+        try:
+            return read_orders(orders)
+        except OrdersError as e:
+            raise ModelNameError(e.problem, column="orders",
+                                 fix=e.fix) from None
     try:
         vals = tuple(int(v) for v in str(orders).split(","))
     except ValueError:
         vals = ()
     ok = (len(vals) == 1 if model == "bias-t" else len(vals) in (1, 2) if model == "thermal"
-          else len(vals) in (3, 4) if model == "composite" else len(vals) == 0)
+          else len(vals) == 0)
     if not ok or any(v < 0 or v > 6 for v in vals):
         raise ModelNameError(f"orders {orders!r} do not fit model '{model}'", column="orders",
                              fix="bias-t: one integer (e.g. 2); thermal: n or n,m (T, dT/dt; "
-                                 "e.g. 2,1); composite: s1,s2,u0[,u1] (e.g. 0,0,2); allan: none")
+                                 "e.g. 2,1); composite: s1,s2,u0[,u1] (e.g. 0,0,2,-); allan: none")
     return vals * 2 if model == "thermal" and len(vals) == 1 else vals
 
 
@@ -119,7 +130,7 @@ def base_terms(ctx: Context, model: str, orders: str | None = None, *, source=No
     if u0 > 0 and varies:
         terms.append(Term("tpoly", {"effect": "base", "channel": 0,
                                     "powers": list(range(1, u0 + 1)), "centre": c, "scale": s}))
-    if len(o) == 4 and varies:
+    if o[3] is not None and varies:
         op = ctx.cov.op_time if ctx.cov.op_time is not None else ctx.cov.t
         terms.append(Term("drift_tpoly", {"effect": "base", "channel": 0,
                                           "powers": list(range(o[3] + 1)), "centre": c,

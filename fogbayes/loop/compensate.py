@@ -2,62 +2,92 @@
 
 bias-t / thermal / allan: output_comp = output - model error, in the input unit (the model
 is fitted in deg/h and converted back). composite: the estimated input rate W (deg/s) that
-solves U = f(W, T, t) for each sample, by Newton's method from the linear-scale guess
-(5 fixed iterations, derivative by central differences; f is a low-order polynomial in W,
-so this converges to machine precision on model-consistent data). Where f(W) does not
-reproduce U at the solution (no inverse in reach, e.g. a measurement beyond the extremum of
-a fitted nonlinearity) the rate is NaN and the row is flagged ``outlier``: never a silently
-wrong rate.
+solves U = f(W, T, t) for each sample, by the composite family's own inversion
+(:func:`fogbayes.compensate_composite.invert_polynomial`: Halley, clamped into the monotone
+region, with the range check). Every term of the loop is, in W, a power of W / scale (or of
+|W| / scale) times a factor of the other covariates (``Kind.rate_powers``), so per sample
+
+    U = a_0 + sum_m a_m^+- (W / W_s)^m,   +- the side of W = 0 (|W| = +-W),
+
+a polynomial with coefficients of its own; the side is the sign of the solution, which
+(the model being monotone about 0) is the sign of (U - a_0) / a_1. Where no inverse lies in
+reach (a measurement beyond the extremum of a fitted nonlinearity) the rate is NaN and the
+row is flagged ``outlier``: never a silently wrong rate.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..compensate_composite import invert_polynomial
 from ..diagnose.context import Context
 from ..diagnose.covariates import Covariates
 from ..diagnose.fitting import ModelFit
-from ..diagnose.terms import design
+from ..diagnose.kinds import kind_of
+from ..diagnose.terms import columns, design
+from ..errors import FogbayesError
 from ..units import convert_rate
-
-_OMEGA_KINDS = ("omega_poly", "omega_abs", "omega_tpoly")
-#: Largest |model(W) - U| / (1 + |U|) (deg/h) accepted at the solution; Newton on these
-#: low-order polynomials reaches ~1e-12 in 5 steps where an inverse exists.
-INVERSE_TOL = 1e-8
 
 
 def _model(terms, beta, cov: Covariates) -> np.ndarray:
     return design(list(terms), cov) @ beta
 
 
-def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray, *,
-               iterations: int = 5) -> np.ndarray:
-    """W (deg/s) with model(W) = measured rate (deg/h), per sample (Newton, module doc)."""
-    scale = max(float(np.max(np.abs(cov.omega))), 1e-9) if cov.omega is not None else 1.0
-    w0 = np.zeros_like(rate_deg_h)
-    f0 = _model(terms, beta, cov._replace(omega=w0))
-    h = 1e-4 * scale
+def rate_polynomial(terms, beta, cov: Covariates):
+    """(a0, A_pos, A_neg, W_s): the model as a polynomial in w = W / W_s per sample.
 
-    def slope_at(w):
-        return (_model(terms, beta, cov._replace(omega=w + h))
-                - _model(terms, beta, cov._replace(omega=w - h))) / (2 * h)
+    a0 (n,) is what does not depend on W; A_pos and A_neg (n, K) hold the coefficients of
+    w^1 .. w^K for W >= 0 and W < 0. W_s is the first rate term's scale.
+    """
+    n = cov.t.size
+    parts, i = [], 0
+    for tm in terms:
+        k = tm.n_cols
+        parts.append((tm, np.asarray(beta[i:i + k], float)))
+        i += k
+    rate_terms = [(tm, b) for tm, b in parts
+                  if any(m for m, _ in kind_of(tm.kind).rate_powers(tm.params))]
+    if not rate_terms:
+        raise FogbayesError("the composite calibration has no term in the input rate W",
+                            column="terms", fix="fit the composite model again (it needs a "
+                                                "scale-factor term)")
+    ws = float(rate_terms[0][0].params["scale"])
+    top = max(m for tm, _ in rate_terms for m, _ in kind_of(tm.kind).rate_powers(tm.params))
+    a0 = np.zeros(n)
+    pos, neg = np.zeros((n, top)), np.zeros((n, top))
+    for tm, b in parts:
+        powers = kind_of(tm.kind).rate_powers(tm.params)
+        if not any(m for m, _ in powers):
+            a0 += columns(tm, cov) @ b
+            continue
+        s = float(tm.params["scale"])
+        at_one = columns(tm, cov._replace(omega=np.full(n, s)))  # the factor at W = scale
+        for j, (m, absolute) in enumerate(powers):
+            c = b[j] * at_one[:, j] * (ws / s) ** m
+            pos[:, m - 1] += c
+            neg[:, m - 1] += (-1) ** m * c if absolute else c
+    return a0, pos, neg, ws
 
-    slope = slope_at(w0)
-    w = (rate_deg_h - f0) / slope
-    for _ in range(iterations):
-        f = _model(terms, beta, cov._replace(omega=w))
-        d = slope_at(w)
-        w = w - (f - rate_deg_h) / np.where(np.abs(d) > 0, d, slope)
-    # no silent wrong rates: where the model does not reproduce the measurement at the
-    # solution (no inverse, or Newton has not converged) the rate is NaN and the row flagged
-    miss = np.abs(_model(terms, beta, cov._replace(omega=w)) - rate_deg_h)
-    return np.where(miss <= INVERSE_TOL * (1.0 + np.abs(rate_deg_h)), w, np.nan)
+
+def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray) -> np.ndarray:
+    """W (deg/s) with model(W) = measured rate (deg/h), per sample (module doc)."""
+    a0, pos, neg, ws = rate_polynomial(terms, beta, cov)
+    # scaled units (the family's): the output at full scale ~ 1
+    u_s = max(float(np.max(np.abs(pos[:, 0] + neg[:, 0]))) / 2, 1e-300)
+    y = (np.asarray(rate_deg_h, float) - a0) / u_s
+    slope = 0.5 * (pos[:, 0] + neg[:, 0])
+    up = y * slope >= 0
+    # no cap besides the folds: a polynomial monotone on a side has one root there
+    w = np.where(up, invert_polynomial(pos / u_s, y, limit=np.inf),
+                 invert_polynomial(neg / u_s, y, limit=np.inf))
+    # the side must hold the solution (the other side's polynomial is not the model there)
+    w = np.where((w >= 0) == up, w, np.where(np.abs(w) <= 1e-12, 0.0, np.nan))
+    return w * ws
 
 
-def invert_rate(fit: ModelFit, cov: Covariates, rate_deg_h: np.ndarray, *,
-                iterations: int = 5) -> np.ndarray:
+def invert_rate(fit: ModelFit, cov: Covariates, rate_deg_h: np.ndarray) -> np.ndarray:
     """:func:`solve_rate` with the terms and coefficients of ``fit``."""
-    return solve_rate(fit.terms, fit.beta, cov, rate_deg_h, iterations=iterations)
+    return solve_rate(fit.terms, fit.beta, cov, rate_deg_h)
 
 
 def compensate(rec, ctx: Context, fit: ModelFit, model: str) -> dict[str, np.ndarray]:

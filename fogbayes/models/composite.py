@@ -130,6 +130,32 @@ def parse_orders(text: str | Orders | None, default: Orders = PAPER_ORDERS) -> O
     return Orders(*vals)
 
 
+#: What ``u1`` reads in the orders grammar when the model has no drift term U1(T) t.
+NO_DRIFT = "-"
+
+
+def read_orders(text: str) -> tuple[int, int, int, int | None]:
+    """The composite orders grammar of every command: ``"s1,s2,u0[,u1]"``.
+
+    Three values set u1 = u0 (paper 000's rule); ``u1`` = ``-`` means no drift term
+    U1(T) t at all (u1 = 0 is a constant U1, not none). Returns (s1, s2, u0, u1 or None).
+    """
+    parts = [p.strip() for p in str(text).split(",")]
+    if len(parts) == 3:
+        parts.append(parts[2])
+    u1 = None if len(parts) == 4 and parts[3] == NO_DRIFT else parts[3:]
+    try:
+        vals = tuple(int(p) for p in parts[:3]) + ((int(u1[0]),) if u1 else ())
+    except ValueError:
+        vals = ()
+    if len(parts) != 4 or len(vals) != (4 if u1 else 3) or any(v < 0 or v > 6 for v in vals):
+        raise OrdersError(f"orders {text!r} are not s1,s2,u0[,u1] (integers 0..6; u1 may "
+                          f"be {NO_DRIFT!r})", column="orders",
+                          fix="e.g. 2,3,2,2 (paper 000), 2,3,2 (u1 = u0) or 0,0,2,- (no "
+                              "U1(T) t drift term)")
+    return vals if u1 else vals + (None,)
+
+
 def orders_of(params: FullParams | ProductParams | RawCoefficients) -> Orders:
     """The orders encoded in the parameter shapes."""
     if isinstance(params, ProductParams):

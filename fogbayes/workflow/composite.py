@@ -33,7 +33,7 @@ from ..inference.composite_classify import classify_fit
 from ..inference.composite_compare import select_orders
 from ..inference.composite_fit import fit_joint, fit_optax
 from ..models.composite import (FullParams, Orders, OrdersError, Scaling, param_labels,
-                                parse_orders, product_to_full, raw_map, raw_offset, to_raw,
+                                product_to_full, raw_map, raw_offset, read_orders, to_raw,
                                 unpack)
 
 METHODS = ("joint", "classification", "product")
@@ -44,10 +44,13 @@ _SEGMENT_KEYS = ("rate_tolerance", "temperature_tolerance", "rate_threshold", "m
 def _orders(orders) -> Orders | None:
     if orders is None or str(orders).strip().lower() == "auto":
         return None
-    parts = [p for p in str(orders).split(",") if p.strip()]
-    if len(parts) == 3:  # the paper's rule: U1 has the order of U0
-        parts.append(parts[2])
-    return parse_orders(",".join(parts))
+    s1, s2, u0, u1 = read_orders(str(orders))  # three values: U1 has the order of U0
+    if u1 is None:
+        raise OrdersError(f"orders {orders!r}: fogbayes fit -m composite always fits paper "
+                          f"000's drift U1(T) t", column="orders",
+                          fix="give u1 (e.g. 0,0,2,0), or use fogbayes loop -m composite "
+                              "for a model without the drift term")
+    return Orders(s1, s2, u0, u1)
 
 
 def _noise(noise) -> str:
