@@ -4,6 +4,7 @@ Usage::
 
     python benchmarks/bench_next_run.py [--workers 2] [--seeds 2] [--out benchmarks/next_run.json]
     python benchmarks/bench_next_run.py --composite   # -> benchmarks/next_run_composite.json
+    python benchmarks/bench_next_run.py --composite --effects scale_factor_asymmetry,scale_factor_nonlinearity
 
 For each undeclared effect (registry default size) on top of the declared quadratic bias in
 T, and for clean sensors:
@@ -107,6 +108,22 @@ GRID_B = {"temperatures": (-20.0, -10.0, 0.0, 10.0, 20.0, 40.0),
           "rates": (2.0, -2.0, 10.0, -10.0, 40.0, -40.0, 80.0, -80.0)}
 
 
+def _true_slope(eff: str, p: dict, w, T):
+    """dU/dW of the simulated sensor (deg/h per deg/s): the table's 3600 plus the planted
+    scale-factor effect's derivative (central difference of its closed form in
+    fogbayes.simulate.effects; |W| at W = 0 counts as 0)."""
+    import inspect
+
+    from fogbayes.simulate import effects as fx
+
+    f = getattr(fx, eff)
+    kw = {k: v for k, v in p.items() if k in inspect.signature(f).parameters}
+    if "T" in inspect.signature(f).parameters:
+        kw["T"] = T
+    h = 1e-3
+    return 3600.0 + (f(w + h, **kw) - f(w - h, **kw)) / (2 * h)
+
+
 def run_composite_case(case: dict) -> dict:
     import numpy as np
 
@@ -127,7 +144,7 @@ def run_composite_case(case: dict) -> dict:
     w_true = np.asarray(b.input_rate, float)
     p = sim_b.truth.params["effects"][eff]
     T = np.asarray(b.temperatures)[:, 0]  # the table's soaked temperature (no sensor noise)
-    slope = 3600.0 * (1.0 + p["coeff"] * (T - p["T_ref"]))
+    slope = _true_slope(eff, p, w_true, T)
     noise = np.sum(list(sim_b.truth.noise_parts.values()), axis=0)
     fit_doc = composite.fit_recording(a, model="composite")
     by_fit = np.asarray(composite.compensate_recording(b, fit_doc)["rate"], float)
@@ -169,9 +186,13 @@ def main() -> None:
     ap.add_argument("--out", default=None)
     ap.add_argument("--composite", action="store_true",
                     help="the rate-table case (scale factor in T) instead of the thermal ones")
+    ap.add_argument("--effects", default="scale_factor_temperature",
+                    help="--composite: comma-separated scale-factor effects (also "
+                         "scale_factor_asymmetry, scale_factor_nonlinearity)")
     args = ap.parse_args()
     if args.composite:
-        todo = [dict(effect="scale_factor_temperature", seed=s) for s in range(args.seeds)]
+        todo = [dict(effect=e, seed=s) for e in args.effects.split(",")
+                for s in range(args.seeds)]
         fn, out = run_composite_case, args.out or DEFAULT_OUT.replace(".json", "_composite.json")
     else:
         todo = [dict(effect=e, seed=s) for s in range(args.seeds) for e in EFFECTS]

@@ -105,3 +105,27 @@ def test_parse_orders_and_raw_shapes():
     assert parse_orders(None) == PAPER_ORDERS
     raw = to_raw(FullParams(jnp.ones((2, 2)), jnp.ones(1), jnp.ones(3)), SC)
     assert isinstance(raw, RawCoefficients) and raw.M.shape == (2, 2) and raw.d.shape == (3,)
+
+
+def test_one_orders_grammar_for_fit_and_loop():
+    """`--orders` means the same in `fit -m composite` and `loop -m composite`: three values
+    set u1 = u0 (paper 000), u1 '-' is no drift term (the loop's default; fit refuses it)."""
+    from fogbayes.loop.bases import ModelNameError
+    from fogbayes.loop.bases import parse_orders as loop_orders
+    from fogbayes.models.composite import read_orders
+    from fogbayes.workflow.composite import _orders as fit_orders
+
+    for text, want in [("2,3,2", (2, 3, 2, 2)), ("2,3,2,1", (2, 3, 2, 1)),
+                       ("0,0,2,-", (0, 0, 2, None))]:
+        assert read_orders(text) == want
+        assert loop_orders("composite", text) == want
+        if want[3] is not None:
+            assert tuple(fit_orders(text)) == want
+    assert loop_orders("composite", None) == (0, 0, 2, None)
+    with pytest.raises(OrdersError, match="drift"):
+        fit_orders("0,0,2,-")
+    for bad in ("1,2", "1,2,-", "1,2,3,4,5", "7,0,0,0", "1,2,3,x"):
+        with pytest.raises(OrdersError):
+            read_orders(bad)
+        with pytest.raises(ModelNameError):
+            loop_orders("composite", bad)

@@ -19,7 +19,8 @@ The model is the loop's final GLS fit (:func:`fogbayes.diagnose.fitting.fit_term
 evaluated on the new recording's own covariates (the same pipeline as the loop: block grid,
 Savitzky-Golay dT/dt with the chamber's corners kept, first-order lags started at the first
 sample). Compensation: bias family ``output - bias`` (in the input unit); composite family
-the input rate W solving ``U = f(W, T, t)`` (:func:`fogbayes.loop.compensate.solve_rate`).
+the input rate W solving ``U = f(W, T, t)`` by the composite family's Halley solver
+(:func:`fogbayes.loop.compensate.solve_rate`).
 
 Sensor properties and run events (``applies``): a term that describes the sensor
 (temperature law, Shupe dT/dt, gradient, lag, hysteresis, scale factor, the warm-up since

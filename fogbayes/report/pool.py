@@ -30,7 +30,7 @@ def _unit_rows(pool: dict) -> list[list]:
                      + ("" if s["resolved"] else " (upper bound)"))
             row += [alone, f"{fmt(p['value'])} {interval_text(p['low'], p['high'])}"]
         o = u["outlier"]
-        row += [fmt(o["p"], sig=2), "flagged" if o["flagged"] else "", u["taus_left_out"]]
+        row += [fmt(o["p"], sig=2), "yes" if o["flagged"] else "no", u["taus_left_out"]]
         rows.append(row)
     return rows
 
@@ -72,7 +72,7 @@ def pool_sections(name: str | None, pool: dict) -> list[Section]:
     header = ["unit"]
     for t in pool["terms"]:
         header += [f"{t} alone", f"{t} pooled"]
-    units.table(header + ["outlier p", "", "taus left out"], _unit_rows(pool))
+    units.table(header + ["outlier p", "flagged", "taus left out"], _unit_rows(pool))
     d = pool["diagnostics"]
     units.details("Method", pool["method"] + ".",
                   f"Sampler: R-hat max {fmt(d['r_hat_max'], sig=4)}, ESS min "
