@@ -38,7 +38,7 @@ import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
 from _timing import best_of  # benchmarks/ is on sys.path when a script runs
-from fogbayes.compensate_composite import build_compensator, compensate_numpy, compensate_sensors
+from fogbayes.composite.compensate import build_compensator, compensate_numpy, compensate_sensors
 from fogbayes.models.composite import PAPER_000, PAPER_ORDERS, Scaling, from_raw, raw_predict
 
 
@@ -125,7 +125,7 @@ def speed(n: int, repeat: int, sensors: int) -> dict:
 
 
 def _sim_data(seed: int):
-    from fogbayes.composite_cells import rate_data
+    from fogbayes.composite.cells import rate_data
     from fogbayes.simulate.scenarios import simulate
 
     return rate_data(simulate("paper000", seed=seed).recording)[0]

@@ -116,7 +116,7 @@ def _bulk(arrays: dict) -> tuple[float, str, float]:
 
 # ------------------------------------------------------------------------------ models
 def composite(sizes):
-    from fogbayes.composite_cells import rate_data
+    from fogbayes.composite.cells import rate_data
     from fogbayes.inference.composite_bayes import fit_bayes
     from fogbayes.models.composite import PAPER_ORDERS
     from fogbayes.simulate.scenarios import simulate

@@ -192,7 +192,7 @@ def roofline(args) -> dict:
     import jax
 
     from fogbayes.compensate import bias_compensator
-    from fogbayes.compensate_composite import build_compensator, compensate_numpy
+    from fogbayes.composite.compensate import build_compensator, compensate_numpy
     from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
     from fogbayes.models.thermal import ThermalSpec, bias_t_spec, thermal_basis
     from fogbayes.models.polynomial import design

@@ -12,7 +12,7 @@ chunks never compiles again; on a CPU the single-sensor ``f`` is a compiled loop
 (:mod:`fogbayes.compensate_loops`) that reads each input once and writes in place. The basis centres and scales the covariates before any power
 is taken, so the compensators also run in float32 (``dtype=np.float32``): temperatures of
 order 1e2 deg C and rates of order 1e4 deg/h keep ~1e-7 relative precision, far below gyro
-noise. The composite (paper 000) compensator lives in :mod:`fogbayes.compensate_composite`.
+noise. The composite (paper 000) compensator lives in :mod:`fogbayes.composite.compensate`.
 """
 
 from __future__ import annotations

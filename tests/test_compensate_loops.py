@@ -50,7 +50,7 @@ def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
     import jax
 
     from fogbayes.batch.vectorized import default_solver
-    from fogbayes.compensate_composite import build_compensator
+    from fogbayes.composite.compensate import build_compensator
     from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
 
     names, terms = CASES["bias-t cubic"]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from fogbayes.composite_cells import rate_data
+from fogbayes.composite.cells import rate_data
 from fogbayes.inference.composite_bayes import _pointwise, cell_data, fit_bayes, marginal_loglik
 from fogbayes.inference.composite_fit import fit_joint
 from fogbayes.models.arma import arma_loglik

@@ -9,10 +9,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.compensate_composite import (MethodError, build_compensator, compensate,
+from fogbayes.composite.compensate import (MethodError, build_compensator, compensate,
                                            compensate_draws, compensate_numpy,
                                            compensate_sensors, monotone_box)
-from fogbayes.composite_tables import (PAPER_TABLES, before_after, format_table, nominal_rate,
+from fogbayes.composite.tables import (PAPER_TABLES, before_after, format_table, nominal_rate,
                                        paper_comparison)
 from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
 
@@ -178,7 +178,7 @@ def test_batched_compensators_compile_once_per_shape():
         stack = jax.tree_util.tree_map(lambda a: jnp.stack([a, a * (1 + 1e-3 * k)]), P)
         compensate_sensors(stack, scs, box, jnp.stack([U, U + k]), Ts, ts)
     assert compensate_sensors._cache_size() == 1
-    from fogbayes.compensate_composite import _draw_rates
+    from fogbayes.composite.compensate import _draw_rates
 
     _draw_rates.clear_cache()
     one_box = jnp.asarray(monotone_box(P, (-30, 60), SC))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fogbayes.composite_cells import rate_data, summarise_cells
+from fogbayes.composite.cells import rate_data, summarise_cells
 from fogbayes.inference.composite_classify import classify_fit, pooled_sigma_d, sigma_d
 from fogbayes.inference.composite_fit import (NoiseSpecError, _xy, default_scaling, fit_joint,
                                               fit_optax, prewhiten, yule_walker_cells)

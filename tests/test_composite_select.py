@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.stats import multivariate_normal
 
-from fogbayes.composite_cells import rate_data
+from fogbayes.composite.cells import rate_data
 from fogbayes.inference.composite_compare import _cell_pointwise, select_orders
 from fogbayes.models.composite import PAPER_ORDERS
 from fogbayes.simulate.scenarios import simulate

@@ -143,7 +143,7 @@ def test_posterior_predictive_interval_brackets_the_true_rate(sim, doc):
     # a stand-in posterior: draws from the GLS fit's Gaussian (what NUTS returns here,
     # see test_composite_bayes) and the fitted white-noise level
     from fogbayes.inference.composite_fit import fit_joint
-    from fogbayes.composite_cells import rate_data
+    from fogbayes.composite.cells import rate_data
     from fogbayes.models.composite import PAPER_ORDERS, pack
     data = rate_data(sim.recording, smooth_s=5.0)[0]
     ls = fit_joint(data, PAPER_ORDERS, noise="cells")

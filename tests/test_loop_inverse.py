@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbayes.compensate_composite import monotone_bounds
+from fogbayes.composite.compensate import monotone_bounds
 from fogbayes.diagnose.covariates import Covariates
 from fogbayes.diagnose.terms import Term
 from fogbayes.loop.compensate import rate_polynomial, solve_rate

@@ -19,7 +19,7 @@ import textwrap
 CHILD = textwrap.dedent("""
     import jax, jax.numpy as jnp, numpy as np
     jax.config.update("jax_enable_x64", True)
-    from fogbayes.composite_cells import rate_data
+    from fogbayes.composite.cells import rate_data
     from fogbayes.inference import composite_bayes as cb
     from fogbayes.inference.composite_fit import _xy, default_scaling
     from fogbayes.models.composite import PAPER_ORDERS

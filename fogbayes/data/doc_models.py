@@ -227,8 +227,8 @@ _SCALING = ("T_ref", "T_scale", "W_scale", "t_scale", "U_ref", "U_scale")
 
 
 def _composite(doc: dict, v: _Checker) -> None:
-    from ..compensate_composite import METHODS
-    from ..composite_cells import CONVENTIONS
+    from ..composite.compensate import METHODS
+    from ..composite.cells import CONVENTIONS
 
     _input(doc, v)
     _optional_objects(doc, v, ("noise", "classification", "order_selection", "bayes",
@@ -285,11 +285,11 @@ def _composite(doc: dict, v: _Checker) -> None:
 
 def _invertible(doc: dict, v: _Checker, orders) -> None:
     """The compensator divides by the small-rate scale factor S_0(T): it must keep one sign
-    over the calibrated temperatures (as :func:`fogbayes.compensate_composite.reciprocal_poly`
+    over the calibrated temperatures (as :func:`fogbayes.composite.compensate.reciprocal_poly`
     requires when the compensator is built)."""
     import numpy as np
 
-    from ..compensate_composite import MethodError, reciprocal_poly
+    from ..composite.compensate import MethodError, reciprocal_poly
     from ..models.composite import Orders, Scaling, unpack
 
     p = doc["params"]

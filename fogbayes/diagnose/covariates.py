@@ -41,7 +41,7 @@ class Covariates(NamedTuple):
     t: s from the first sample; T: (n, k) deg C; names: channel names; Tdot: (n,) deg C/min
     of the first channel (None without temperature); omega: (n,) deg/s or None;
     duration: record span (s); op_time: operating time of a rate-table run (s since the
-    last input-rate step, :func:`fogbayes.composite_cells.operating_time`) or None.
+    last input-rate step, :func:`fogbayes.composite.cells.operating_time`) or None.
     """
 
     t: np.ndarray
@@ -178,7 +178,7 @@ def covariates_of(rec, grid: BlockGrid, *, rate_window_s: float = 60.0) -> Covar
     omega = None if rec.input_rate is None else np.asarray(rec.input_rate, float)
     op = None
     if omega is not None:
-        from ..composite_cells import operating_time
+        from ..composite.cells import operating_time
 
         op = operating_time(t, omega, convention="cell")
     return Covariates(t, T, tuple(rec.temperature_names), Tdot, omega, float(t[-1]), op)

@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..composite_cells import RateData
+from ..composite.cells import RateData
 from ..models.composite import Orders, Scaling, raw_map, raw_offset, unpack
 from .composite_fit import _xy, default_scaling, parse_noise
 from .composite_noise import cell_stats
@@ -362,7 +362,7 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
 
 def posterior_params(fit: BayesFit, *, max_draws: int = 200):
     """Thinned draws as FullParams with a leading draw axis, and the noise std per draw
-    (scaled output units), for :func:`fogbayes.compensate_composite.compensate_draws`."""
+    (scaled output units), for :func:`fogbayes.composite.compensate.compensate_draws`."""
     th = fit.theta.reshape(-1, fit.theta.shape[-1])
     step = max(1, th.shape[0] // max_draws)
     return (unpack(jnp.asarray(th[::step]), fit.orders),

@@ -28,7 +28,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from ..composite_cells import CellSummary, RateData, summarise_cells
+from ..composite.cells import CellSummary, RateData, summarise_cells
 from ..errors import TooShortError
 from ..models.composite import FullParams, Orders, Scaling, design_matrix
 from .composite_fit import default_scaling

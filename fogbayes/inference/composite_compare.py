@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..composite_cells import RateData
+from ..composite.cells import RateData
 from ..models.composite import Orders, Scaling, design_matrix
 from .composite_fit import default_scaling
 from .composite_noise import cell_stats, fit_cell_noise

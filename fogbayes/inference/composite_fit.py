@@ -28,7 +28,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..composite_cells import RateData
+from ..composite.cells import RateData
 from ..errors import FogbayesError, TooShortError
 from ..models.composite import (FullParams, Orders, ProductParams, Scaling, design_matrix,
                                 full_to_product, n_params, pack, product_to_full, unpack)
@@ -134,7 +134,7 @@ def fit_joint(data: RateData, orders: Orders, *, scaling: Scaling | None = None,
     """Closed-form least squares of the full-matrix model on all in-cell samples.
 
     Args:
-        data: from :func:`fogbayes.composite_cells.rate_data`.
+        data: from :func:`fogbayes.composite.cells.rate_data`.
         orders: the model orders.
         scaling: default :func:`default_scaling` of the data.
         noise: ``"white"`` (OLS), ``"ar<p>"`` (feasible GLS, AR(p) within cells) or

@@ -3,7 +3,7 @@
 bias-t / thermal / allan: output_comp = output - model error, in the input unit (the model
 is fitted in deg/h and converted back). composite: the estimated input rate W (deg/s) that
 solves U = f(W, T, t) for each sample, by the composite family's own inversion
-(:func:`fogbayes.compensate_composite.invert_polynomial`: Halley, clamped into the monotone
+(:func:`fogbayes.composite.compensate.invert_polynomial`: Halley, clamped into the monotone
 region, with the range check). Every term of the loop is, in W, a power of W / scale (or of
 |W| / scale) times a factor of the other covariates (``Kind.rate_powers``), so per sample
 
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..compensate_composite import invert_polynomial
+from ..composite.compensate import invert_polynomial
 from ..diagnose.context import Context
 from ..diagnose.covariates import Covariates
 from ..diagnose.fitting import ModelFit

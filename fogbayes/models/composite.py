@@ -108,6 +108,12 @@ PAPER_000 = RawCoefficients(
 )
 
 
+#: A compensated sample counts as solved when |w P(w) - y| <= RESID_ABS + RESID_REL |y|
+#: (scaled units, y ~ 1 at full scale): 1e3 x above float32 rounding, far below a failed
+#: solve. Shared by the XLA program and the compiled loop (fogbayes.composite.compensate).
+RESID_ABS, RESID_REL = 1e-6, 1e-5
+
+
 class OrdersError(FogbayesError):
     """An order string or order value the composite model cannot use."""
 

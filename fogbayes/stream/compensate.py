@@ -181,7 +181,7 @@ def _composite(source, fit, out, rows, include_time, dtype):
     with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
         for ch in source.chunks(rows, fields=fields):
             t = ch.time
-            if by_cell:  # fogbayes.composite_cells.operating_time, carried across chunks
+            if by_cell:  # fogbayes.composite.cells.operating_time, carried across chunks
                 w = ch.input_rate
                 step = np.abs(np.diff(w, prepend=w[0] if prev_w is None else prev_w)) > 0.01
                 if prev_w is None:

@@ -2,7 +2,7 @@
 
 ``fit_recording``:
 
-1. split the run into (T_i, W_j) cells (:func:`fogbayes.composite_cells.rate_data`);
+1. split the run into (T_i, W_j) cells (:func:`fogbayes.composite.cells.rate_data`);
 2. paper 000's classification fitting with its sigma_d order table (always reported);
 3. orders: given (``"s1,s2,u0,u1"``; three values set u1 = u0 as the paper), or selected
    (``None``/``"auto"``) by PSIS-LOO over cells (``order_criterion="loo"``, or ``"waic"``
@@ -24,10 +24,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..composite_cells import operating_time, rate_data
+from ..composite.cells import operating_time, rate_data
 from ..data.documents import FIT_SCHEMA, validate_in_memory
-from ..composite_tables import before_after, format_table, nominal_rate
-from ..compensate_composite import Compensator, build_compensator, compensate_draws
+from ..composite.tables import before_after, format_table, nominal_rate
+from ..composite.compensate import Compensator, build_compensator, compensate_draws
 from ..errors import FogbayesError, MissingColumnError, UnitError
 from ..inference.composite_classify import classify_fit
 from ..inference.composite_compare import select_orders

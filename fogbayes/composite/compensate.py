@@ -31,14 +31,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .errors import FogbayesError
-from .models.composite import FullParams, ProductParams, Scaling, _horner, product_to_full
+from ..errors import FogbayesError
+from ..models.composite import (RESID_ABS, RESID_REL, FullParams, ProductParams, Scaling,
+                                 _horner, product_to_full)
 
 METHODS = ("halley", "newton", "paper")
-#: A sample counts as solved when |w P(w) - y| <= RESID_ABS + RESID_REL |y| (scaled
-#: units, y ~ 1 at full scale): 1e3 x above float32 rounding, far below a failed solve.
-RESID_ABS, RESID_REL = 1e-6, 1e-5
-
 
 class CompensationResult(NamedTuple):
     """Compensated rate (deg/s) and whether the sample lies in the invertible region."""
@@ -62,7 +59,7 @@ class Compensator(NamedTuple):
     method: str
     fn: object  # jitted XLA (U, T, t) -> CompensationResult, coefficients baked in
     stream_fn: object  # the XLA rate, U's buffer donated to the output
-    loop: object = None  # on a CPU: the compiled loop(out, U, T, t) (compensate_composite_loop)
+    loop: object = None  # on a CPU: the compiled loop(out, U, T, t) (:mod:`.compensate_loop`)
 
     def __call__(self, U, T, t) -> CompensationResult:
         if self.loop is not None:
@@ -340,7 +337,7 @@ def choose_iterations(p: FullParams, sc: Scaling, box, T_range, W_range, *,
     if method not in METHODS:
         raise MethodError(f"unknown method {method!r}", column="method",
                           fix=f"use one of {', '.join(METHODS)}")
-    from .models.composite import predict_scaled
+    from ..models.composite import predict_scaled
     Tg = np.linspace(*T_range, 21)
     wlo = max(W_range[0] / sc.W_scale, box[0] * 0.999)
     whi = min(W_range[1] / sc.W_scale, box[1] * 0.999)
@@ -387,7 +384,7 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
                         donate_argnums=0)
     loop = None
     if jax.default_backend() == "cpu":  # one compiled pass per sample, at memory speed
-        from .compensate_composite_loop import compile_loop
+        from .compensate_loop import compile_loop
 
         loop = compile_loop(consts, sc_f, box, **kw)
     return Compensator(p, sc, box, k, method, fn, stream_fn, loop)

@@ -24,8 +24,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .data.recording import Recording
-from .errors import FogbayesError, MissingColumnError, TooShortError
+from ..data.recording import Recording
+from ..errors import FogbayesError, MissingColumnError, TooShortError
 
 CONVENTIONS = ("cell", "temperature", "run")
 
@@ -114,7 +114,7 @@ def rate_data(rec: Recording, *, convention: str = "cell", schedule=None, table=
         table: a ready :class:`fogbayes.preprocess.RateTable` (skips detection).
         **segment_options: passed to :func:`fogbayes.preprocess.segment_rate_table`.
     """
-    from .preprocess import segment_rate_table
+    from ..preprocess import segment_rate_table
 
     src = rec.meta.source
     if rec.input_rate is None and schedule is None and table is None:

@@ -1,4 +1,4 @@
-"""The composite compensator (:mod:`fogbayes.compensate_composite`) as a compiled CPU loop.
+"""The composite compensator (:mod:`fogbayes.composite.compensate`) as a compiled CPU loop.
 
 Per sample, the same algorithm as the XLA program ``_rate`` (scaled units)::
 
@@ -17,10 +17,10 @@ Compiled once per compensator (a fit), ~0.3 s.
 
 from __future__ import annotations
 
-from ._numba import numba
+from .._numba import numba
 import numpy as np
 
-from .compensate_composite import RESID_ABS, RESID_REL
+from ..models.composite import RESID_ABS, RESID_REL
 
 
 def _horner(coefs, x: str) -> str:
