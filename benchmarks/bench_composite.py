@@ -39,7 +39,7 @@ import numpy as np
 import fogbayes  # noqa: F401  (float64)
 from _timing import best_of  # benchmarks/ is on sys.path when a script runs
 from fogbayes.composite.compensate import build_compensator, compensate_numpy, compensate_sensors
-from fogbayes.models.composite import PAPER_000, PAPER_ORDERS, Scaling, from_raw, raw_predict
+from fogbayes.composite.model import PAPER_000, PAPER_ORDERS, Scaling, from_raw, raw_predict
 
 
 def _stream_time(comp, U, T, t, repeat: int) -> float:
@@ -134,9 +134,9 @@ def _sim_data(seed: int):
 def coverage(seeds: int, bayes: int) -> dict:
     from scipy import stats
 
-    from fogbayes.inference.composite_classify import classify_fit
-    from fogbayes.inference.composite_fit import fit_joint
-    from fogbayes.models.composite import pack, raw_map, raw_offset
+    from fogbayes.composite.classify import classify_fit
+    from fogbayes.composite.fit import fit_joint
+    from fogbayes.composite.model import pack, raw_map, raw_offset
 
     truth = np.concatenate([PAPER_000.M.ravel(), PAPER_000.c, PAPER_000.d])
     q = stats.norm.ppf(0.95)
@@ -153,7 +153,7 @@ def coverage(seeds: int, bayes: int) -> dict:
             sd = np.sqrt(np.diag(J @ fit.cov @ J.T))
             hits[key].append(np.abs(est - truth) < qq * sd)
         if seed < bayes:
-            from fogbayes.inference.composite_bayes import fit_bayes
+            from fogbayes.composite.bayes import fit_bayes
 
             bf = fit_bayes(d, PAPER_ORDERS, seed=seed, noise="cells")
             lo, hi = np.quantile(bf.raw_draws().reshape(-1, 18), [0.05, 0.95], axis=0)
@@ -171,7 +171,7 @@ def coverage(seeds: int, bayes: int) -> dict:
 
 
 def orders(seeds: int) -> dict:
-    from fogbayes.inference.composite_compare import select_orders
+    from fogbayes.composite.compare import select_orders
 
     out = {}
     for crit in ("loo", "waic", "sigma_d"):

@@ -130,7 +130,7 @@ def run_composite_case(case: dict) -> dict:
     from fogbayes.loop.metrics import block_rms
     from fogbayes.loop.testbed import _scaled
     from fogbayes.simulate.scenarios import simulate
-    from fogbayes.workflow import composite
+    from fogbayes.composite import workflow as composite
 
     eff = case["effect"]
     law = {eff: _scaled(eff, 1.0, None)}

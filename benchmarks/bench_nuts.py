@@ -6,7 +6,7 @@
     python benchmarks/bench_nuts.py --chains 4 --warmup 500 --samples 500 --json out.json
 
 Models (one row each; data as in the tests, fixed seeds):
-  composite  ``inference.composite_bayes.fit_bayes``, cells noise, PAPER_ORDERS, on the
+  composite  ``composite.bayes.fit_bayes``, cells noise, PAPER_ORDERS, on the
              paper000 scenario (seed 11, 20 s dwell, 5 s smoothing); NUTS samples the noise
              parameters (u_sigma, log_lam, rho), theta is drawn exactly given them.
   allan      ``inference.allan_bayes.fit_bayes``, all five terms, on 2^14 samples at 10 Hz
@@ -117,8 +117,8 @@ def _bulk(arrays: dict) -> tuple[float, str, float]:
 # ------------------------------------------------------------------------------ models
 def composite(sizes):
     from fogbayes.composite.cells import rate_data
-    from fogbayes.inference.composite_bayes import fit_bayes
-    from fogbayes.models.composite import PAPER_ORDERS
+    from fogbayes.composite.bayes import fit_bayes
+    from fogbayes.composite.model import PAPER_ORDERS
     from fogbayes.simulate.scenarios import simulate
 
     c, w, s = sizes(4, 500, 500)

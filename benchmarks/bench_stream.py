@@ -193,7 +193,7 @@ def roofline(args) -> dict:
 
     from fogbayes.compensate import bias_compensator
     from fogbayes.composite.compensate import build_compensator, compensate_numpy
-    from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
+    from fogbayes.composite.model import PAPER_000, Scaling, from_raw, raw_predict
     from fogbayes.models.thermal import ThermalSpec, bias_t_spec, thermal_basis
     from fogbayes.models.polynomial import design
 

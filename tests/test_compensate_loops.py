@@ -51,7 +51,7 @@ def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
 
     from fogbayes.batch.vectorized import default_solver
     from fogbayes.composite.compensate import build_compensator
-    from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
+    from fogbayes.composite.model import PAPER_000, Scaling, from_raw, raw_predict
 
     names, terms = CASES["bias-t cubic"]
     rng = np.random.default_rng(9)

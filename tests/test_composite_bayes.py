@@ -13,10 +13,10 @@ import pytest
 from scipy.stats import multivariate_normal
 
 from fogbayes.composite.cells import rate_data
-from fogbayes.inference.composite_bayes import _pointwise, cell_data, fit_bayes, marginal_loglik
-from fogbayes.inference.composite_fit import fit_joint
+from fogbayes.composite.bayes import _pointwise, cell_data, fit_bayes, marginal_loglik
+from fogbayes.composite.fit import fit_joint
 from fogbayes.models.arma import arma_loglik
-from fogbayes.models.composite import PAPER_000, PAPER_ORDERS, pack, raw_map, raw_offset
+from fogbayes.composite.model import PAPER_000, PAPER_ORDERS, pack, raw_map, raw_offset
 from fogbayes.simulate.scenarios import simulate
 
 RNG = np.random.default_rng(0)
@@ -113,7 +113,7 @@ def test_posterior_agrees_with_gls_and_covers_the_truth():
 
 def test_cells_pointwise_matches_the_order_comparison_module():
     # the same conditional per-cell likelihood, written in JAX here and NumPy there
-    from fogbayes.inference.composite_compare import _cell_pointwise
+    from fogbayes.composite.compare import _cell_pointwise
 
     s, lam, rho = 0.4, 0.8, 0.5
     theta = RNG.standard_normal(P)

@@ -14,7 +14,7 @@ from fogbayes.composite.compensate import (MethodError, build_compensator, compe
                                            compensate_sensors, monotone_box)
 from fogbayes.composite.tables import (PAPER_TABLES, before_after, format_table, nominal_rate,
                                        paper_comparison)
-from fogbayes.models.composite import PAPER_000, Scaling, from_raw, raw_predict
+from fogbayes.composite.model import PAPER_000, Scaling, from_raw, raw_predict
 
 TEMPS = np.array([-30, -20, -10, -5, 0, 5, 10, 20, 40, 60.0])
 RATES = np.array([-80, -40, -20, -10, -5, -2, -1, 1, 2, 5, 10, 20, 40, 80.0])
@@ -151,7 +151,7 @@ def test_posterior_interval_covers_the_truth():
     key = jax.random.PRNGKey(0)
     th = jnp.stack([jnp.concatenate([P.M.ravel(), P.c, P.d])] * 50)
     th = th * (1 + 1e-4 * jax.random.normal(key, th.shape))
-    from fogbayes.models.composite import PAPER_ORDERS, unpack
+    from fogbayes.composite.model import PAPER_ORDERS, unpack
     draws = unpack(th, PAPER_ORDERS)
     box = jnp.asarray(monotone_box(P, (-30, 60), SC))
     med, lo, hi = compensate_draws(draws, SC, box, U, TG, TT, key=key, noise_sd=np.full(50, 1e-5))

@@ -9,11 +9,11 @@ import pytest
 from scipy import stats
 
 from fogbayes.composite.cells import rate_data, summarise_cells
-from fogbayes.inference.composite_classify import classify_fit, pooled_sigma_d, sigma_d
-from fogbayes.inference.composite_fit import (NoiseSpecError, _xy, default_scaling, fit_joint,
+from fogbayes.composite.classify import classify_fit, pooled_sigma_d, sigma_d
+from fogbayes.composite.fit import (NoiseSpecError, _xy, default_scaling, fit_joint,
                                               fit_optax, prewhiten, yule_walker_cells)
-from fogbayes.inference.composite_noise import _solve, cell_stats, fit_cell_noise
-from fogbayes.models.composite import (PAPER_000, PAPER_ORDERS, Orders, pack, product_to_full,
+from fogbayes.composite.noise import _solve, cell_stats, fit_cell_noise
+from fogbayes.composite.model import (PAPER_000, PAPER_ORDERS, Orders, pack, product_to_full,
                                        raw_map, raw_offset, to_raw)
 from fogbayes.simulate.scenarios import simulate
 

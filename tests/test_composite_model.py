@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.models.composite import (PAPER_000, PAPER_ORDERS, FullParams, Orders,
+from fogbayes.composite.model import (PAPER_000, PAPER_ORDERS, FullParams, Orders,
                                        OrdersError, ProductParams, RawCoefficients, Scaling,
                                        design_matrix, from_raw, full_to_product, n_params, pack,
                                        param_labels, parse_orders, predict, product_to_full,
@@ -112,8 +112,8 @@ def test_one_orders_grammar_for_fit_and_loop():
     set u1 = u0 (paper 000), u1 '-' is no drift term (the loop's default; fit refuses it)."""
     from fogbayes.loop.bases import ModelNameError
     from fogbayes.loop.bases import parse_orders as loop_orders
-    from fogbayes.models.composite import read_orders
-    from fogbayes.workflow.composite import _orders as fit_orders
+    from fogbayes.composite.model import read_orders
+    from fogbayes.composite.workflow import _orders as fit_orders
 
     for text, want in [("2,3,2", (2, 3, 2, 2)), ("2,3,2,1", (2, 3, 2, 1)),
                        ("0,0,2,-", (0, 0, 2, None))]:

@@ -8,8 +8,8 @@ import pytest
 from scipy.stats import multivariate_normal
 
 from fogbayes.composite.cells import rate_data
-from fogbayes.inference.composite_compare import _cell_pointwise, select_orders
-from fogbayes.models.composite import PAPER_ORDERS
+from fogbayes.composite.compare import _cell_pointwise, select_orders
+from fogbayes.composite.model import PAPER_ORDERS
 from fogbayes.simulate.scenarios import simulate
 
 

@@ -12,9 +12,9 @@ import pytest
 
 from fogbayes.cli._common import to_jsonable
 from fogbayes.errors import FogbayesError, MissingColumnError, UnitError
-from fogbayes.models.composite import PAPER_000, OrdersError, from_raw, predict, Scaling
+from fogbayes.composite.model import PAPER_000, OrdersError, from_raw, predict, Scaling
 from fogbayes.simulate.scenarios import simulate
-from fogbayes.workflow.composite import compensate_recording, fit_recording
+from fogbayes.composite.workflow import compensate_recording, fit_recording
 
 OPTS = {"smooth_s": 5.0}  # 20 s cells: short temperature-steadiness window (see test_composite_fit)
 
@@ -136,15 +136,15 @@ def test_user_schedule_gives_the_same_cells(sim, doc):
 
 
 def test_posterior_predictive_interval_brackets_the_true_rate(sim, doc):
-    from fogbayes.workflow.composite import compensate_interval
+    from fogbayes.composite.workflow import compensate_interval
 
     with pytest.raises(FogbayesError, match="posterior"):
         compensate_interval(sim.recording, doc)
     # a stand-in posterior: draws from the GLS fit's Gaussian (what NUTS returns here,
     # see test_composite_bayes) and the fitted white-noise level
-    from fogbayes.inference.composite_fit import fit_joint
+    from fogbayes.composite.fit import fit_joint
     from fogbayes.composite.cells import rate_data
-    from fogbayes.models.composite import PAPER_ORDERS, pack
+    from fogbayes.composite.model import PAPER_ORDERS, pack
     data = rate_data(sim.recording, smooth_s=5.0)[0]
     ls = fit_joint(data, PAPER_ORDERS, noise="cells")
     rng = np.random.default_rng(0)

@@ -355,7 +355,7 @@ def test_long_savgol_window_agrees_to_fft_rounding(thermal_run, tmp_path):
 
 def test_composite_compensation_is_bit_identical(tmp_path):
     from fogbayes.simulate.scenarios import simulate
-    from fogbayes.workflow.composite import compensate_recording, fit_recording
+    from fogbayes.composite.workflow import compensate_recording, fit_recording
 
     warnings.filterwarnings("ignore")
     rec = simulate("paper000", seed=21, dwell=20.0).recording

@@ -1,7 +1,7 @@
 """Guard for the XLA CPU hang that made the jax pin in pyproject.toml necessary.
 
 With jax/jaxlib 0.10.0-0.10.2 on CPU the jitted, vmapped posterior draw of
-:func:`fogbayes.inference.composite_bayes.fit_bayes` (Cholesky, triangular solves, a
+:func:`fogbayes.composite.bayes.fit_bayes` (Cholesky, triangular solves, a
 tridiagonal scan and a batched inverse over 1000 draws) never returns: one async-dispatch
 worker waits in ``CpuPjRtRawLoadedExecutable::Execute`` for a result while every XLA thread
 is idle (gdb, 2026-11-22). In isolation it hung on the first or second of 40 executions in
@@ -20,9 +20,9 @@ CHILD = textwrap.dedent("""
     import jax, jax.numpy as jnp, numpy as np
     jax.config.update("jax_enable_x64", True)
     from fogbayes.composite.cells import rate_data
-    from fogbayes.inference import composite_bayes as cb
-    from fogbayes.inference.composite_fit import _xy, default_scaling
-    from fogbayes.models.composite import PAPER_ORDERS
+    from fogbayes.composite import bayes as cb
+    from fogbayes.composite.fit import _xy, default_scaling
+    from fogbayes.composite.model import PAPER_ORDERS
     from fogbayes.simulate.scenarios import simulate
 
     data = rate_data(simulate("paper000", seed=11, dwell=20.0).recording, smooth_s=5.0)[0]

@@ -4,7 +4,7 @@ For each sample, with S_j(T) = sum_i M_ij T^i and the bias B(T, t) = U0(T) + U1(
 
     g(W) = W * P(W) - y = 0,   P(W) = sum_j S_j(T) W^j,   y = U - B(T, t)
 
-is solved in scaled units (T', W', y' of :mod:`fogbayes.models.composite`), which keeps
+is solved in scaled units (T', W', y' of :mod:`fogbayes.composite.model`), which keeps
 float32 usable. Methods (all start from the linear guess w0 = y / S_0(T), as the paper):
 
 * ``"halley"`` (default): w <- w - 2 g g' / (2 g'^2 - g g''), cubic convergence;
@@ -32,7 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import FogbayesError
-from ..models.composite import (RESID_ABS, RESID_REL, FullParams, ProductParams, Scaling,
+from .model import (RESID_ABS, RESID_REL, FullParams, ProductParams, Scaling,
                                  _horner, product_to_full)
 
 METHODS = ("halley", "newton", "paper")
@@ -337,7 +337,7 @@ def choose_iterations(p: FullParams, sc: Scaling, box, T_range, W_range, *,
     if method not in METHODS:
         raise MethodError(f"unknown method {method!r}", column="method",
                           fix=f"use one of {', '.join(METHODS)}")
-    from ..models.composite import predict_scaled
+    from .model import predict_scaled
     Tg = np.linspace(*T_range, 21)
     wlo = max(W_range[0] / sc.W_scale, box[0] * 0.999)
     whi = min(W_range[1] / sc.W_scale, box[1] * 0.999)

@@ -20,7 +20,7 @@ from __future__ import annotations
 from .._numba import numba
 import numpy as np
 
-from ..models.composite import RESID_ABS, RESID_REL
+from .model import RESID_ABS, RESID_REL
 
 
 def _horner(coefs, x: str) -> str:

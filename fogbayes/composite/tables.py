@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.composite import RawCoefficients
+from .model import RawCoefficients
 
 #: Paper 000, Tables 1 and 2: (T, W) -> (before, before %, after, after %).
 PAPER_TABLES = {

@@ -290,7 +290,7 @@ def _invertible(doc: dict, v: _Checker, orders) -> None:
     import numpy as np
 
     from ..composite.compensate import MethodError, reciprocal_poly
-    from ..models.composite import Orders, Scaling, unpack
+    from ..composite.model import Orders, Scaling, unpack
 
     p = doc["params"]
     try:

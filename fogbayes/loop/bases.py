@@ -5,7 +5,7 @@
     composite  U = S1(T) S2(W) W + U0(T) [+ U1(T) t]  linearised  (paper 000); orders
                "s1,s2,u0[,u1]" give W' T'^i (i <= s1), W'^(j+1) (j <= s2), T'^i (i <= u0),
                t' T'^i (i <= u1); the grammar of ``fogbayes fit -m composite``
-               (:func:`fogbayes.models.composite.read_orders`): three values set u1 = u0,
+               (:func:`fogbayes.composite.model.read_orders`): three values set u1 = u0,
                u1 = "-" leaves the drift term out. Default "0,0,2,-": a linear scale
                factor and a quadratic bias, so every scale-factor effect is something the
                loop can find.
@@ -38,7 +38,7 @@ from ..diagnose.candidates import EFFECTS
 from ..diagnose.context import Context
 from ..diagnose.terms import Term
 from ..errors import FogbayesError, MissingColumnError
-from ..models.composite import OrdersError, read_orders
+from ..composite.model import OrdersError, read_orders
 
 MODELS = ("bias-t", "thermal", "composite", "allan")
 

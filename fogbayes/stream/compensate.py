@@ -1,7 +1,7 @@
 """Compensate a record larger than memory, chunk by chunk, into a file.
 
 :func:`compensate_stream` does what :func:`fogbayes.workflow.thermal.compensate_recording`
-(``bias-t``, ``thermal``) and :func:`fogbayes.workflow.composite.compensate_recording`
+(``bias-t``, ``thermal``) and :func:`fogbayes.composite.workflow.compensate_recording`
 (``composite``) do, with the same jitted compensators, one fixed-size chunk at a time (the
 last chunk is padded to that size, so the compensator compiles once):
 
@@ -162,7 +162,7 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
 
 
 def _composite(source, fit, out, rows, include_time, dtype):
-    from ..workflow.composite import compensator_from_fit
+    from ..composite.workflow import compensator_from_fit
 
     unit = (fit.get("input") or {}).get("unit")
     if unit is not None and source.unit != unit:

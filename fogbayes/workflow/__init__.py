@@ -4,7 +4,7 @@
 ``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (docs/DESIGN.md / contracts):
 
 * :mod:`.thermal`   -- ``bias-t`` and ``thermal`` (paper 004)
-* :mod:`.composite` -- ``composite`` (paper 000)
+* :mod:`fogbayes.composite.workflow` -- ``composite`` (paper 000; the family's package)
 * :mod:`.allan`     -- ``allan`` (five-term Allan model)
 * :mod:`.arma`      -- ``arma`` (paper 002 drift model; nothing to compensate)
 
@@ -19,9 +19,9 @@ from types import ModuleType
 
 from ..errors import FogbayesError
 
-#: model name -> workflow module
-MODULES = {"bias-t": "thermal", "thermal": "thermal", "composite": "composite", "allan": "allan",
-           "arma": "arma"}
+#: model name -> workflow module (relative to this package)
+MODULES = {"bias-t": ".thermal", "thermal": ".thermal", "composite": "..composite.workflow",
+           "allan": ".allan", "arma": ".arma"}
 
 
 def workflow_for(model: str) -> ModuleType:
@@ -29,4 +29,4 @@ def workflow_for(model: str) -> ModuleType:
     if model not in MODULES:
         raise FogbayesError(f"unknown model '{model}'", column="model",
                             fix=f"use one of {', '.join(MODULES)}")
-    return importlib.import_module(f".{MODULES[model]}", __name__)
+    return importlib.import_module(MODULES[model], __name__)

@@ -24,15 +24,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..composite.cells import operating_time, rate_data
+from .cells import operating_time, rate_data
 from ..data.documents import FIT_SCHEMA, validate_in_memory
-from ..composite.tables import before_after, format_table, nominal_rate
-from ..composite.compensate import Compensator, build_compensator, compensate_draws
+from .tables import before_after, format_table, nominal_rate
+from .compensate import Compensator, build_compensator, compensate_draws
 from ..errors import FogbayesError, MissingColumnError, UnitError
-from ..inference.composite_classify import classify_fit
-from ..inference.composite_compare import select_orders
-from ..inference.composite_fit import fit_joint, fit_optax
-from ..models.composite import (FullParams, Orders, OrdersError, Scaling, param_labels,
+from .classify import classify_fit
+from .compare import select_orders
+from .fit import fit_joint, fit_optax
+from .model import (FullParams, Orders, OrdersError, Scaling, param_labels,
                                 product_to_full, raw_map, raw_offset, read_orders, to_raw,
                                 unpack)
 
@@ -77,8 +77,8 @@ def _fit(data, orders, method, noise):
     import jax
     import jax.numpy as jnp
 
-    from ..inference.composite_fit import _vector_to_theta
-    from ..models.composite import pack
+    from .fit import _vector_to_theta
+    from .model import pack
 
     if method == "classification":
         from scipy import stats
@@ -163,7 +163,7 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
                                   "scores": selection.scores}
     converged = bool(ok)
     if bayes:
-        from ..inference.composite_bayes import fit_bayes
+        from .bayes import fit_bayes
 
         bf = fit_bayes(data, want, seed=seed, noise=noise, scaling=sc, warmup=num_warmup,
                        samples=num_samples, chains=num_chains)

@@ -1,7 +1,7 @@
 """Joint least-squares fits of the composite model (paper 000) on all samples.
 
 Full matrix (linear in the parameters), in the scaled units of
-:mod:`fogbayes.models.composite`::
+:mod:`fogbayes.composite.model`::
 
     y' = (U - U_ref) / U_scale = X(T, W, t) theta + e,   theta = pack(M', c', d')
 
@@ -28,11 +28,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..composite.cells import RateData
+from .cells import RateData
 from ..errors import FogbayesError, TooShortError
-from ..models.composite import (FullParams, Orders, ProductParams, Scaling, design_matrix,
+from .model import (FullParams, Orders, ProductParams, Scaling, design_matrix,
                                 full_to_product, n_params, pack, product_to_full, unpack)
-from .lsq import lbfgs_scan
+from ..inference.lsq import lbfgs_scan
 
 
 class LsqFit(NamedTuple):
@@ -139,7 +139,7 @@ def fit_joint(data: RateData, orders: Orders, *, scaling: Scaling | None = None,
         scaling: default :func:`default_scaling` of the data.
         noise: ``"white"`` (OLS), ``"ar<p>"`` (feasible GLS, AR(p) within cells) or
             ``"cells"`` (white + AR(1)-across-cells offsets by REML, the default of the
-            workflow: see :mod:`fogbayes.inference.composite_noise`).
+            workflow: see :mod:`fogbayes.composite.noise`).
         iterations: FGLS passes (phi from the previous pass's residuals).
     """
     sc = scaling or default_scaling(data)
@@ -148,7 +148,7 @@ def fit_joint(data: RateData, orders: Orders, *, scaling: Scaling | None = None,
     p = n_params(orders)
     _check_size(y.size, p, orders)
     if p_ar < 0:
-        from .composite_noise import cell_stats, fit_cell_noise
+        from .noise import cell_stats, fit_cell_noise
 
         cn = fit_cell_noise(cell_stats(X, y, data.cell, data.time))
         rms = float(np.sqrt(np.mean((y - X @ cn.theta) ** 2))) * sc.U_scale

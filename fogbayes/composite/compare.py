@@ -1,11 +1,11 @@
 """Order selection for the composite model: paper 000's sigma_d, and WAIC / LOO.
 
-``criterion="sigma_d"`` is the paper's rule (eq. 11, :mod:`.composite_classify`): the order
+``criterion="sigma_d"`` is the paper's rule (eq. 11, :mod:`.classify`): the order
 with the smallest RMS fit error. It is known to over-fit (a useless extra coefficient
 lowers sigma_d about half the time); measured recovery is in benchmarks/RESULTS_composite.md.
 
 ``criterion="loo"`` / ``"waic"``: each candidate is fitted by GLS with the cell-offset
-noise model (:mod:`.composite_noise`, its (lam, rho) by REML for that candidate). Its
+noise model (:mod:`.noise`, its (lam, rho) by REML for that candidate). Its
 posterior (flat prior, s^2 at its estimate) is the Gaussian N(theta_hat, cov); draws give
 the pointwise log-likelihood per *cell* (cells, not correlated samples, are the units left
 out), each cell's mean taken conditionally on the other cells because neighbouring cells
@@ -22,10 +22,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..composite.cells import RateData
-from ..models.composite import Orders, Scaling, design_matrix
-from .composite_fit import default_scaling
-from .composite_noise import cell_stats, fit_cell_noise
+from .cells import RateData
+from .model import Orders, Scaling, design_matrix
+from .fit import default_scaling
+from .noise import cell_stats, fit_cell_noise
 
 CRITERIA = ("loo", "waic", "sigma_d")
 
@@ -96,7 +96,7 @@ def select_orders(data: RateData, *, criterion: str = "loo", scaling: Scaling | 
                   start: Orders = Orders(2, 2, 2, 2), max_order: int = 4,
                   threshold: float = 4.0, seed: int = 0) -> OrderSelection:
     """Coordinate-wise order search by LOO or WAIC over cells (module doc)."""
-    from .composite_classify import classify_fit
+    from .classify import classify_fit
 
     sc = scaling or default_scaling(data)
     if criterion == "sigma_d":

@@ -17,7 +17,7 @@
 Uncertainty (which the paper does not give): step 5's cell-level errors include the
 bias-instability offsets of whole cells, correlated between neighbouring cells, so M and c
 are fitted by GLS with white + AR(1)-across-cells errors (REML,
-:mod:`fogbayes.inference.composite_noise`); d by OLS on the n_T values U1(T_i) with
+:mod:`fogbayes.composite.noise`); d by OLS on the n_T values U1(T_i) with
 Student-t intervals on n_T - u1 - 1 degrees of freedom.
 """
 
@@ -28,11 +28,11 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from ..composite.cells import CellSummary, RateData, summarise_cells
+from .cells import CellSummary, RateData, summarise_cells
 from ..errors import TooShortError
-from ..models.composite import FullParams, Orders, Scaling, design_matrix
-from .composite_fit import default_scaling
-from .composite_noise import cell_stats, fit_cell_noise
+from .model import FullParams, Orders, Scaling, design_matrix
+from .fit import default_scaling
+from .noise import cell_stats, fit_cell_noise
 
 
 class ClassificationFit(NamedTuple):

@@ -9,7 +9,7 @@ Noise models (``noise=``), eta their parameters:
 * ``"ar<p>"``: AR(p) within each cell, exact likelihood per cell (the first p values of
   a cell ~ N(0, s^2 Gamma_p), the rest conditionally given their p predecessors); phi
   through the stationary map :func:`fogbayes.models.arma.pacf_to_ar`, PACF ~ U(-1, 1);
-* ``"cells"``: white + AR(1)-across-cells offsets (:mod:`.composite_noise`), with
+* ``"cells"``: white + AR(1)-across-cells offsets (:mod:`.noise`), with
   log lam ~ N(-4, 3^2) (lam = offset variance / white variance; e^-4 ~ offsets of a few %
   of the white noise, the prior spans 1e-6 ... 1e2) and rho ~ U(0, 0.99). The tridiagonal
   algebra of that module runs in two ``lax.scan`` passes (O(K) per likelihood).
@@ -25,7 +25,7 @@ NUTS samples only (s, eta) from this marginal (a 1-4 dimensional, well-condition
 posterior; sampling theta directly fights correlations close to +-1 and scales spanning
 1e6), and theta | s, eta, y ~ N(m, H^-1) is then drawn exactly for every draw. The
 pointwise log-likelihood is stored per cell (the units for WAIC/LOO; under ``"cells"`` each
-cell's mean is taken conditionally on the other cells', as in :mod:`.composite_compare`).
+cell's mean is taken conditionally on the other cells', as in :mod:`.compare`).
 """
 
 from __future__ import annotations
@@ -37,10 +37,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..composite.cells import RateData
-from ..models.composite import Orders, Scaling, raw_map, raw_offset, unpack
-from .composite_fit import _xy, default_scaling, parse_noise
-from .composite_noise import cell_stats
+from .cells import RateData
+from .model import Orders, Scaling, raw_map, raw_offset, unpack
+from .fit import _xy, default_scaling, parse_noise
+from .noise import cell_stats
 
 
 class BayesFit(NamedTuple):
@@ -112,7 +112,7 @@ def _tridiag_solve(diag, off, V):
 
 
 def _cells_suff(lam, rho, st):
-    """(G, h, q, log|V|) of white + AR(1)-across-cells noise, O(K p) (composite_noise)."""
+    """(G, h, q, log|V|) of white + AR(1)-across-cells noise, O(K p) (:mod:`.noise`)."""
     r = rho ** st["gaps"]
     w = 1.0 / (1.0 - r * r)
     qd = jnp.ones(st["N"].shape[0]).at[:-1].add(r * r * w).at[1:].add(w - 1.0)
@@ -199,7 +199,7 @@ def _model(data, start, *, noise: str, p_ar: int, prior_scale: float):
 
 def _start(data: RateData, orders: Orders, sc: Scaling, noise: str, p_ar: int) -> dict:
     """Least-squares values of the noise parameters: sigma's centring and NUTS's start."""
-    from .composite_fit import fit_joint
+    from .fit import fit_joint
 
     ls = fit_joint(data, orders, scaling=sc, noise=noise)
     start = {"sigma": ls.sigma / sc.U_scale}
@@ -218,7 +218,7 @@ def _pointwise(noise, eta, theta, data, K):
     """Per-cell log-likelihood at one draw (for WAIC/LOO)."""
     s2 = eta["sigma"] ** 2
     cell = data["cell"]
-    if noise == "cells":  # each cell's mean given the other cells' (composite_compare)
+    if noise == "cells":  # each cell's mean given the other cells' (:mod:`.compare`)
         st = data["st"]
         lam = jnp.exp(eta["log_lam"])
         rb = st["yb"] - st["Xb"] @ theta
@@ -271,7 +271,7 @@ def _sampler(noise: str, p_ar: int, prior_scale: float, target_accept: float, wa
     again for ~15 s). Returns constrained draws (chains, samples, ...) and divergences."""
     from numpyro.infer.util import constrain_fn, potential_energy
 
-    from .nuts import chain_sampler
+    from ..inference.nuts import chain_sampler
 
     model = partial(_model, noise=noise, p_ar=p_ar, prior_scale=prior_scale)
     return chain_sampler(
