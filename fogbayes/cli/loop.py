@@ -127,7 +127,7 @@ def loop(
     if json_out != "-":
         say(f"wrote {compensated}")
     if report is not None:
-        from ..plot.loop import loop_report
+        from ..report.loop import loop_report
 
         loop_report(res, report, title=f"Closed loop: {rec_path.name}", rec=rec)
         say(f"wrote {report}")

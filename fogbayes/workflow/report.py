@@ -93,7 +93,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
         if table is not None:
             parts.append(table)
     if loop is not None:
-        from ..plot.loop import loop_section
+        from ..report.loop import loop_section
 
         parts.append(loop_section(loop))
     allan_doc = fit if fit is not None and fit.get("model") == "allan" else None
@@ -213,7 +213,7 @@ def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
     if det is not None:  # composite: the relative rate error of the calibration table
         return _composite_headline(rec, det)
     if loop is not None:
-        from ..plot.loop import loop_headline
+        from ..report.loop import loop_headline
 
         return loop_headline(loop, rec)
     from ..report.bootstrap import single_stability
