@@ -1,0 +1,47 @@
+"""Imports point one way: figures never import reports, and the composite family's modules
+form no cycle among themselves (each had one: plot/loop <-> report, compensate <->
+compensate_loop). Read from the source with ast, so lazy imports inside functions count."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PKG = Path(__file__).resolve().parent.parent / "fogbayes"
+
+
+def _relative_imports(path: Path) -> set[str]:
+    """Absolute dotted names of the package-relative imports of ``path``."""
+    parts = list(path.relative_to(PKG.parent).with_suffix("").parts)
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level > 0:
+            base = parts[:len(parts) - node.level]
+            out.add(".".join(base + (node.module.split(".") if node.module else [])))
+    return out
+
+
+def test_no_figure_module_imports_a_report():
+    for f in sorted((PKG / "plot").glob("*.py")):
+        bad = [m for m in _relative_imports(f) if m.startswith("fogbayes.report")]
+        assert bad == [], f"{f.name} imports {bad}"
+
+
+def test_the_composite_family_has_no_import_cycle():
+    mods = {f"fogbayes.composite.{f.stem}": _relative_imports(f)
+            for f in (PKG / "composite").glob("*.py") if f.stem != "__init__"}
+    graph = {m: {t for t in deps if t in mods} for m, deps in mods.items()}
+    state: dict[str, int] = {}
+
+    def visit(m, path):
+        state[m] = 1
+        for t in graph[m]:
+            assert state.get(t) != 1, f"import cycle: {' -> '.join(path + [m, t])}"
+            if t not in state:
+                visit(t, path + [m])
+        state[m] = 2
+
+    for m in graph:
+        if m not in state:
+            visit(m, [])
+    assert "fogbayes.composite.compensate" in graph["fogbayes.composite.workflow"]
