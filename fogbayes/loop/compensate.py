@@ -72,14 +72,13 @@ def rate_polynomial(terms, beta, cov: Covariates):
 def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray) -> np.ndarray:
     """W (deg/s) with model(W) = measured rate (deg/h), per sample (module doc)."""
     a0, pos, neg, ws = rate_polynomial(terms, beta, cov)
-    # scaled units (the family's): the output at full scale ~ 1
-    u_s = max(float(np.max(np.abs(pos[:, 0] + neg[:, 0]))) / 2, 1e-300)
+    slope = 0.5 * (pos[:, 0] + neg[:, 0])  # dU/dw at 0, the |W| term left out
+    u_s = max(float(np.max(np.abs(slope))), 1e-300)  # scaled units: full scale ~ 1
     y = (np.asarray(rate_deg_h, float) - a0) / u_s
-    slope = 0.5 * (pos[:, 0] + neg[:, 0])
-    up = y * slope >= 0
-    # no cap besides the folds: a polynomial monotone on a side has one root there
-    w = np.where(up, invert_polynomial(pos / u_s, y, limit=np.inf),
-                 invert_polynomial(neg / u_s, y, limit=np.inf))
+    up = y * slope >= 0  # the side of W = 0 the solution lies on
+    # one solve, each sample with its side's polynomial; no cap besides the folds (a
+    # polynomial monotone on a side has one root there)
+    w = invert_polynomial(np.where(up[:, None], pos, neg) / u_s, y, limit=np.inf)
     # the side must hold the solution (the other side's polynomial is not the model there)
     w = np.where((w >= 0) == up, w, np.where(np.abs(w) <= 1e-12, 0.0, np.nan))
     return w * ws
