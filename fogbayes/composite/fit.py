@@ -28,11 +28,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .cells import RateData
 from ..errors import FogbayesError, TooShortError
-from .model import (FullParams, Orders, ProductParams, Scaling, design_matrix,
-                                full_to_product, n_params, pack, product_to_full, unpack)
 from ..inference.lsq import lbfgs_scan
+from .cells import RateData
+from .model import (FullParams, Orders, ProductParams, Scaling, design_matrix,
+                    full_to_product, n_params, pack, product_to_full, unpack)
 
 
 class LsqFit(NamedTuple):

@@ -24,17 +24,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from .cells import operating_time, rate_data
 from ..data.documents import FIT_SCHEMA, validate_in_memory
-from .tables import before_after, format_table, nominal_rate
-from .compensate import Compensator, build_compensator, compensate_draws
 from ..errors import FogbayesError, MissingColumnError, UnitError
+from .cells import operating_time, rate_data
 from .classify import classify_fit
+from .compensate import Compensator, build_compensator, compensate_draws
 from .compare import select_orders
 from .fit import fit_joint, fit_optax
 from .model import (FullParams, Orders, OrdersError, Scaling, param_labels,
-                                product_to_full, raw_map, raw_offset, read_orders, to_raw,
-                                unpack)
+                    product_to_full, raw_map, raw_offset, read_orders, to_raw, unpack)
+from .tables import before_after, format_table, nominal_rate
 
 METHODS = ("joint", "classification", "product")
 _SEGMENT_KEYS = ("rate_tolerance", "temperature_tolerance", "rate_threshold", "min_duration",
