@@ -69,20 +69,48 @@ def compensate_with_loop(doc: dict, recording, *, rec_path, params, out, json_ou
     cols = applied.columns
     say(f"wrote {out}: {len(cols['time'])} rows, {int(cols['outlier'].sum())} flagged as "
         "outliers")
-    for s in applied.skipped:
-        say(f"left out {s['effect']} ({s['kind']}): a run event of the calibration run; "
-            "--run-events applies it")
-    for o in applied.outside:
-        (lo, hi), (slo, shi) = o["calibrated"], o["seen"]
-        say(f"warning: {o['covariate']} outside the calibrated range [{lo:.3g}, {hi:.3g}] on "
-            f"{100 * o['share']:.1f} % of the samples (seen [{slo:.3g}, {shi:.3g}]): "
-            "extrapolated")
+    tell_loop_notes(applied.skipped, applied.outside)
     summ = loop_summary(recording, doc, applied, rec_path=rec_path, params=params, out=out)
     if "rms_10s_deg_h" in summ:
         r = summ["rms_10s_deg_h"]
         say(f"10 s RMS {r['before']:.4g} -> {r['after']:.4g} deg/h")
     if json_out:
         write_json(summ, json_out)
+
+
+def stream_with_loop(doc: dict, source, *, rec_path, params, out, json_out, run_events: bool,
+                     rows: int) -> None:
+    """Apply a loop document's calibration chunk by chunk (:mod:`fogbayes.stream.loop_calibration`)."""
+    from ..errors import about_file
+    from ..stream.loop_calibration import compensate_loop_stream
+
+    with progress(f"compensating {rec_path} in chunks of {rows} rows (loop calibration, "
+                  f"{doc['model']})"), about_file(rec_path):
+        res = compensate_loop_stream(source, doc, out, rows=rows, run_events=run_events)
+    say(f"wrote {res.path}: {res.n} rows, {res.outliers} flagged as outliers")
+    tell_loop_notes(res.skipped, res.outside)
+    if json_out:
+        write_json({"file": str(rec_path), "params": str(params), "out": str(res.path),
+                    "model": doc.get("model"), "schema": doc.get("schema"), "rows": res.n,
+                    "outliers": res.outliers, "columns": list(res.columns),
+                    "terms_applied": [t["effect"] + ":" + t["kind"]
+                                      for t in doc["calibration"]["terms"]
+                                      if t["kind"] not in {s["kind"] for s in res.skipped}],
+                    "run_events_left_out": res.skipped,
+                    "outside_calibrated_range": res.outside, "passes": res.passes},
+                   json_out)
+
+
+def tell_loop_notes(skipped: list, outside: list) -> None:
+    """Say which run events were left out and which covariates left the calibrated range."""
+    for s in skipped:
+        say(f"left out {s['effect']} ({s['kind']}): a run event of the calibration run; "
+            "--run-events applies it")
+    for o in outside:
+        (lo, hi), (slo, shi) = o["calibrated"], o["seen"]
+        say(f"warning: {o['covariate']} outside the calibrated range [{lo:.3g}, {hi:.3g}] on "
+            f"{100 * o['share']:.1f} % of the samples (seen [{slo:.3g}, {shi:.3g}]): "
+            "extrapolated")
 
 
 def summary(rec, fit_doc: dict, cols: dict, *, rec_path, params, out) -> dict:
@@ -169,16 +197,39 @@ def compensate(
                             fix="fit the axis to compensate on its own (--axis x) and pass "
                                 "that document")
 
+    def stream_source(unit, names=None):
+        """The record opened for chunked reading (what --stream can read)."""
+        from ..data.logs import is_log
+        from ..stream import open_source
+
+        if is_log(rec) or topic is not None or instance is not None or axis is not None:
+            raise FogbayesError("--stream reads .npz, .parquet and .npy files, not gyro logs",
+                                column="--stream",
+                                fix="drop --stream (a log is read into memory), or drop "
+                                    "--topic/--instance/--axis")
+        if time_unit != "s" or temperature_scale != 1.0 or temperature_offset != 0.0:
+            raise FogbayesError("--stream reads time in s and temperatures in deg C as they "
+                                "are", column="--stream",
+                                fix="convert the file first, or drop --stream (--time-unit "
+                                    "and --temperature-scale/-offset work in memory)")
+        given = fit_doc.get("input") or {}
+        return open_source(rec, time=time_column or "time", output=column or "output",
+                           temperature=list(temperature or []) or names,
+                           input_rate=input_rate or "input_rate", unit=unit,
+                           scale_factor=scale_factor if scale_factor is not None
+                           else given.get("scale_factor"))
+
     if is_loop_document(fit_doc):
-        if fit_doc["model"] == "allan" or stream:
+        if fit_doc["model"] == "allan":
             raise FogbayesError(
-                "this loop document describes noise only: there is nothing to compensate"
-                if fit_doc["model"] == "allan" else
-                "--stream cannot apply a loop calibration yet (its dT/dt and lag terms are "
-                "computed over the whole record)", file=str(params), column="--params",
-                fix="compensate with a bias-t, thermal or composite loop document"
-                if fit_doc["model"] == "allan" else "drop --stream (the in-memory path "
-                                                    "applies it)")
+                "this loop document describes noise only: there is nothing to compensate",
+                file=str(params), column="--params",
+                fix="compensate with a bias-t, thermal or composite loop document")
+        if stream:
+            src = stream_source(agreed_unit(fit_doc, str(params), rec, output_unit))
+            stream_with_loop(fit_doc, src, rec_path=rec, params=params, out=out,
+                             json_out=json_out, run_events=run_events, rows=chunk_rows)
+            return
         given = fit_doc.get("input") or {}
         recording = load_recording(
             rec, column=column, time_column=time_column,
@@ -201,27 +252,9 @@ def compensate(
     given = fit_doc.get("input") or {}
     unit = agreed_unit(fit_doc, str(params), rec, output_unit)  # file, document, option agree
     if stream:
-        from ..stream import compensate_stream, open_source
+        from ..stream import compensate_stream
 
-        from ..data.logs import is_log
-
-        if is_log(rec) or topic is not None or instance is not None or axis is not None:
-            raise FogbayesError("--stream reads .npz, .parquet and .npy files, not gyro logs",
-                                column="--stream",
-                                fix="drop --stream (a log is read into memory), or drop "
-                                    "--topic/--instance/--axis")
-        if time_unit != "s" or temperature_scale != 1.0 or temperature_offset != 0.0:
-            raise FogbayesError("--stream reads time in s and temperatures in deg C as they "
-                                "are", column="--stream",
-                                fix="convert the file first, or drop --stream (--time-unit "
-                                    "and --temperature-scale/-offset work in memory)")
-
-        src = open_source(rec, time=time_column or "time", output=column or "output",
-                          temperature=list(temperature or []) or None,
-                          input_rate=input_rate or "input_rate",
-                          unit=unit,
-                          scale_factor=scale_factor if scale_factor is not None
-                          else given.get("scale_factor"))
+        src = stream_source(unit)
         with progress(f"compensating {rec} in chunks of {chunk_rows} rows ({fit_doc['model']})"), \
                 about_file(rec):
             res = compensate_stream(src, fit_doc, out, rows=chunk_rows)

@@ -103,6 +103,21 @@ def operating_time(time, input_rate=None, cells=None, *, convention: str = "cell
     return time - time[origin_idx]
 
 
+def operating_time_chunk(time, input_rate, carry, *, rate_tolerance: float = 0.01):
+    """:func:`operating_time` (convention ``"cell"``) of one chunk of a record read in
+    order, and the carry for the next chunk: ``carry`` is (time of the current origin, last
+    input rate) of the chunks before, None on the first chunk (whose first row is an
+    origin). Equal, chunk by chunk, to the whole record's values."""
+    t, w = np.asarray(time, dtype=float), np.asarray(input_rate, dtype=float)
+    origin_t, prev_w = (None, None) if carry is None else carry
+    step = np.abs(np.diff(w, prepend=w[0] if prev_w is None else prev_w)) > rate_tolerance
+    if prev_w is None:
+        step[0] = True
+    idx = np.maximum.accumulate(np.where(step, np.arange(t.size), -1))
+    origin = np.where(idx >= 0, t[np.maximum(idx, 0)], origin_t if origin_t is not None else t[0])
+    return t - origin, (float(origin[-1]), float(w[-1]))
+
+
 def rate_data(rec: Recording, *, convention: str = "cell", schedule=None, table=None,
               **segment_options) -> tuple[RateData, object]:
     """Split a rate-table Recording into cells; returns (RateData, the RateTable used).

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import difflib
 import json
-import re
 from pathlib import Path
 from typing import Sequence
 
@@ -34,10 +33,12 @@ from ._read import read_parquet as _read_parquet
 from .atomic import atomic_path
 from .logs import LOG_SUFFIXES, is_log, read_log_for_load  # libraries: only in the readers
 from .recording import Metadata, Recording
+from .temperature_columns import META_KEY as TEMPERATURES_KEY
+from .temperature_columns import listed as listed_temperatures
+from .temperature_columns import temperature_columns
 
 FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".npz": "npz"}
-_TEMP_RE = re.compile(r"^temperature(_\d+)?$")
-_META_KEYS = ("unit", "sensor_id", "sample_rate", "scale_factor")
+_META_KEYS = ("unit", "sensor_id", "sample_rate", "scale_factor", TEMPERATURES_KEY)
 
 
 #: The command-line flag that names each column role (fogbayes/cli/_common.py).
@@ -155,7 +156,7 @@ def _recording(path: Path, table: Table, *, time, output, temperature, input_rat
         t = t / divisor
     y = need(output, "output")
     if temperature is None:
-        tnames = sorted((c for c in columns if _TEMP_RE.match(c)), key=_temp_order)
+        tnames = temperature_columns(columns, meta.get(TEMPERATURES_KEY), src)
     else:
         tnames = [temperature] if isinstance(temperature, str) else list(temperature)
     temps = np.column_stack([need(c, "temperature") for c in tnames]) if tnames else None
@@ -199,7 +200,9 @@ def save(rec: Recording, path: str | Path) -> Path:
         cols["input_rate"] = rec.input_rate
     meta = {"unit": rec.unit, "sensor_id": rec.meta.sensor_id,
             "sample_rate": rec.meta.sample_rate, "scale_factor": rec.scale_factor,
-            **{k: v for k, v in rec.meta.extra.items() if _jsonable(v)}}
+            TEMPERATURES_KEY: listed_temperatures(rec.temperature_names),
+            **{k: v for k, v in rec.meta.extra.items()
+               if _jsonable(v) and k != TEMPERATURES_KEY}}
     with atomic_path(path) as tmp:
         {"csv": _write_csv, "parquet": _write_parquet, "npz": _write_npz}[kind](tmp, cols, meta)
     return path
@@ -274,9 +277,6 @@ def _as_float(values: np.ndarray, src: str, name: str) -> np.ndarray:
                                   fix="write plain decimal numbers (no units or text in cells)") from None
     return out
 
-
-def _temp_order(name: str) -> int:
-    return 1 if name == "temperature" else int(name.rsplit("_", 1)[1])
 
 
 def _jsonable(v) -> bool:

@@ -24,18 +24,30 @@ from .terms import Term, columns
 MAD_TO_SIGMA = 1.4826
 
 
+def spike_scale(d: np.ndarray) -> tuple[float, float]:
+    """(median, robust sigma) of the first differences ``d``: sigma = 1.4826 MAD."""
+    med = np.median(d)
+    return float(med), float(MAD_TO_SIGMA * np.median(np.abs(d - med)))
+
+
+def spikes_between(d: np.ndarray, med: float, s: float, n_sigma: float = 6.0) -> np.ndarray:
+    """Flags of the samples between consecutive differences ``d`` (len(d) - 1 of them):
+    both differences beyond ``n_sigma`` robust sigmas, of opposite signs."""
+    big = np.abs(d - med) > n_sigma * s
+    return big[:-1] & big[1:] & (np.sign(d[:-1]) != np.sign(d[1:]))
+
+
 def spike_flags(x: np.ndarray, n_sigma: float = 6.0) -> np.ndarray:
     """Flag isolated spikes: both differences around sample i exceed n_sigma robust sigmas."""
     x = np.asarray(x, float)
     if x.size < 5:
         return np.zeros(x.size, bool)
     d = np.diff(x)
-    s = MAD_TO_SIGMA * np.median(np.abs(d - np.median(d)))
+    med, s = spike_scale(d)
     if s <= 0:
         return np.zeros(x.size, bool)
-    big = np.abs(d - np.median(d)) > n_sigma * s
     flag = np.zeros(x.size, bool)
-    flag[1:-1] = big[:-1] & big[1:] & (np.sign(d[:-1]) != np.sign(d[1:]))
+    flag[1:-1] = spikes_between(d, med, s, n_sigma)
     return flag
 
 

@@ -22,7 +22,7 @@ fitted derivative b + 2 c d + 2 c_jump max(d, 0), which keeps the kink. A strong
 be followed by weaker ones where the lag's curvature decays (exp(-t / tau) is not quadratic
 over two windows); there the kinked fit is simply the better local fit.
 
-The block means must sit at their block centres (``covariates.block_temperature``): on a
+The block means must sit at their block centres (``covariates.centred_block_temperature``): on a
 steep ramp a mean time off the centre by one sample looks like a corner.
 
 Measured on a lagged two-ramp programme (tests/test_diagnose_corners.py, 0.01 deg C noise):
@@ -88,15 +88,17 @@ def find_corners(tb: np.ndarray, Tb: np.ndarray, n: int, alpha: float = ALPHA):
     return out
 
 
-def keep_corners(tb: np.ndarray, Tb: np.ndarray, t: np.ndarray, rate: np.ndarray,
-                 n: int) -> np.ndarray:
-    """``rate`` (deg C/s, per sample at times ``t``) with the kinked fit's slope near corners."""
+def corner_reach(tb: np.ndarray, n: int) -> float:
+    """How far (s) from a corner the kinked fit's slope replaces the smooth one."""
+    return (0.5 * n + 1.0) * float(tb[1] - tb[0]) if tb.size > 1 else 0.0
+
+
+def replace_near_corners(corners, half: float, t: np.ndarray, rate: np.ndarray) -> np.ndarray:
+    """``rate`` (deg C/s at times ``t``) with each corner's kinked-fit slope within ``half``."""
     out = np.array(rate, dtype=float, copy=True)
-    if Tb.size < 2:
-        return out
-    half = (0.5 * n + 1.0) * float(tb[1] - tb[0])
-    for k, beta in find_corners(tb, Tb, n):
+    for k, beta in corners:
         near = np.abs(t - k) <= half
         d = t[near] - k
         out[near] = beta[1] + 2.0 * beta[2] * d + 2.0 * beta[3] * np.maximum(d, 0.0)
     return out
+

@@ -32,7 +32,7 @@ from scipy.interpolate import CubicSpline
 
 from ..errors import TooShortError
 from ..preprocess.temperature_rate import savgol_slope_grid
-from .corners import keep_corners
+from .corners import corner_reach, find_corners, replace_near_corners
 
 
 class Covariates(NamedTuple):
@@ -89,28 +89,30 @@ class BlockGrid(NamedTuple):
         return out[:, 0] if flat else out
 
 
-def block_grid(t: np.ndarray, fs: float, *, use: np.ndarray | None = None,
-               target_blocks: int = 2500, max_dt: float = 10.0,
-               min_dt: float | None = None) -> BlockGrid:
-    """Choose ``dt`` (a multiple of 1/fs, <= ``max_dt`` when possible) and bin the samples.
-
-    ``dt = m / fs`` with m the smallest integer giving at most ``target_blocks`` blocks,
-    but never more than ``max_dt`` unless the record would then exceed 3 x target blocks.
-    """
-    t = np.asarray(t, dtype=float)
-    span = float(t[-1] - t[0])
+def block_step(span: float, fs: float, *, target_blocks: int = 2500, max_dt: float = 10.0,
+               min_dt: float | None = None) -> float:
+    """``dt = m / fs`` with m the smallest integer giving at most ``target_blocks`` blocks
+    over ``span`` s, but never more than ``max_dt`` unless the record would then exceed
+    3 x target blocks (and at least ``min_dt`` when given)."""
     step = 1.0 / float(fs)
     m = max(1, int(math.ceil(span / step / target_blocks)))
     if min_dt is not None:
         m = max(m, int(math.ceil(min_dt / step - 1e-9)))
     if m * step > max_dt and span / max_dt <= 3 * target_blocks:
         m = max(1, int(math.floor(max_dt / step + 1e-9)))
-    dt = m * step
-    rel = t - t[0]
-    index = np.floor(rel / dt + 1e-6 * step / dt).astype(np.int64)
-    nb = int(index[-1]) + 1
-    use = np.ones(t.size, bool) if use is None else np.asarray(use, bool)
-    count = np.bincount(index[use], minlength=nb).astype(float)
+    return m * step
+
+
+def block_index(rel: np.ndarray, dt: float, fs: float) -> np.ndarray:
+    """Block of each sample at ``rel`` s from the first (a stamp a hair early stays in)."""
+    step = 1.0 / float(fs)
+    return np.floor(rel / dt + 1e-6 * step / dt).astype(np.int64)
+
+
+def grid_of_counts(dt: float, count: np.ndarray) -> BlockGrid:
+    """The grid's per-block parts (counts, mask, weights, centres) from the used-sample
+    counts; ``index``/``use`` are left empty (a stream keeps no per-sample arrays)."""
+    nb = count.size
     mask = (count > 0).astype(float)
     m_ref = float(np.median(count[count > 0])) if np.any(count > 0) else 1.0
     w = np.where(count > 0, m_ref / np.maximum(count, 1), 1.0)
@@ -118,7 +120,22 @@ def block_grid(t: np.ndarray, fs: float, *, use: np.ndarray | None = None,
     if int(mask.sum()) < 20:
         raise TooShortError(f"only {int(mask.sum())} blocks of {dt:g} s hold data",
                             column="time", fix="give a longer record (the loop needs >= 20 blocks)")
-    return BlockGrid(dt, index, use, count, mask, w, centre)
+    empty = np.zeros(0, np.int64)
+    return BlockGrid(dt, empty, empty.astype(bool), count, mask, w, centre)
+
+
+def block_grid(t: np.ndarray, fs: float, *, use: np.ndarray | None = None,
+               target_blocks: int = 2500, max_dt: float = 10.0,
+               min_dt: float | None = None) -> BlockGrid:
+    """Choose ``dt`` (:func:`block_step`) and bin the samples."""
+    t = np.asarray(t, dtype=float)
+    dt = block_step(float(t[-1] - t[0]), fs, target_blocks=target_blocks, max_dt=max_dt,
+                    min_dt=min_dt)
+    index = block_index(t - t[0], dt, fs)
+    nb = int(index[-1]) + 1
+    use = np.ones(t.size, bool) if use is None else np.asarray(use, bool)
+    count = np.bincount(index[use], minlength=nb).astype(float)
+    return grid_of_counts(dt, count)._replace(index=index, use=use)
 
 
 def _fill(x: np.ndarray, mask: np.ndarray, tb: np.ndarray) -> np.ndarray:
@@ -136,38 +153,69 @@ def rate_window(grid: BlockGrid, window_s: float = 60.0) -> int:
     return wl
 
 
-def block_temperature(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
-                      wl: int) -> tuple[np.ndarray, np.ndarray]:
+def centred_block_temperature(T_mean: np.ndarray, t_mean: np.ndarray, mask: np.ndarray,
+                              tb: np.ndarray, dt: float,
+                              wl: int) -> tuple[np.ndarray, np.ndarray]:
     """Block-mean temperature at the block centres and its slope (deg C/s) per block.
 
-    A block's mean is the temperature at its samples' mean time, which is off the centre in
-    a partial block or where a time stamp falls across a boundary; it is moved to the centre
-    to first order, Tb - slope (t_mean - t_centre), so that a steep ramp does not look
-    rough (on a 1 deg C/min ramp sampled at 10 Hz the offsets of 0.05 s made false corners).
+    A block's mean ``T_mean`` is the temperature at its samples' mean time ``t_mean``, which
+    is off the centre in a partial block or where a time stamp falls across a boundary; it
+    is moved to the centre to first order, Tb - slope (t_mean - t_centre), so that a steep
+    ramp does not look rough (on a 1 deg C/min ramp sampled at 10 Hz the offsets of 0.05 s
+    made false corners).
     """
-    Tb = _fill(grid.mean(T0), grid.mask, grid.t)
+    Tb = _fill(T_mean, mask, tb)
     if wl < 5:
-        return Tb, np.gradient(Tb, grid.dt)
-    slope = savgol_slope_grid(Tb, wl, 2, grid.dt)
-    shift = _fill(grid.mean(t_rel), grid.mask, grid.t) - grid.t
-    if np.any(np.abs(shift) > 1e-9 * grid.dt):
+        return Tb, np.gradient(Tb, dt)
+    slope = savgol_slope_grid(Tb, wl, 2, dt)
+    shift = _fill(t_mean, mask, tb) - tb
+    if np.any(np.abs(shift) > 1e-9 * dt):
         Tb = Tb - slope * shift
-        slope = savgol_slope_grid(Tb, wl, 2, grid.dt)
+        slope = savgol_slope_grid(Tb, wl, 2, dt)
     return Tb, slope
+
+
+def block_temperature(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
+                      wl: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`centred_block_temperature` of samples binned on ``grid``."""
+    return centred_block_temperature(grid.mean(T0), grid.mean(t_rel), grid.mask, grid.t,
+                                     grid.dt, wl)
+
+
+class RateCurve(NamedTuple):
+    """dT/dt of a record as a function of time: a cubic spline through the block slopes,
+    with the kinked fit near each chamber corner. Built once from the block means; called
+    on any samples (all of them, or a stream's chunk)."""
+
+    spline: CubicSpline
+    tb: np.ndarray                    # block centres (s from the first sample)
+    corners: list                     # (time, beta) of corners.find_corners
+    half: float                       # the corner fit's reach, s
+
+    def __call__(self, t_rel: np.ndarray) -> np.ndarray:
+        """deg C/min at ``t_rel`` (s from the record's first sample)."""
+        # A cubic spline, not linear interpolation: kinks every block would put a comb of
+        # lines at k / dt into every model that uses dT/dt.
+        rate = self.spline(np.clip(t_rel, self.tb[0], self.tb[-1]))
+        if self.corners:  # the chamber's corners are real kinks: keep them (corners.py)
+            rate = replace_near_corners(self.corners, self.half, t_rel, rate)
+        return 60.0 * rate
+
+
+def rate_curve(T_mean: np.ndarray, t_mean: np.ndarray, mask: np.ndarray, tb: np.ndarray,
+               dt: float, wl: int) -> RateCurve:
+    """The :class:`RateCurve` of block means (``wl`` from :func:`rate_window`)."""
+    Tb, slope = centred_block_temperature(T_mean, t_mean, mask, tb, dt, wl)
+    corners = find_corners(tb, Tb, wl) if wl >= 5 and Tb.size >= 2 else []
+    return RateCurve(CubicSpline(tb, slope), tb, corners, corner_reach(tb, wl))
 
 
 def temperature_rate(grid: BlockGrid, T0: np.ndarray, t_rel: np.ndarray,
                      window_s: float = 60.0) -> np.ndarray:
     """dT/dt (deg C/min) per sample: Savitzky-Golay slope of block means, interpolated,
     with the chamber's corners kept (module docstring)."""
-    wl = rate_window(grid, window_s)
-    Tb, slope = block_temperature(grid, T0, t_rel, wl)
-    # A cubic spline, not linear interpolation: kinks every block would put a comb of
-    # lines at k / dt into every model that uses dT/dt.
-    rate = CubicSpline(grid.t, slope)(np.clip(t_rel, grid.t[0], grid.t[-1]))
-    if wl >= 5:  # the chamber's corners are real kinks: keep them (corners.py)
-        rate = keep_corners(grid.t, Tb, t_rel, rate, wl)
-    return 60.0 * rate
+    return rate_curve(grid.mean(T0), grid.mean(t_rel), grid.mask, grid.t, grid.dt,
+                      rate_window(grid, window_s))(t_rel)
 
 
 def covariates_of(rec, grid: BlockGrid, *, rate_window_s: float = 60.0) -> Covariates:

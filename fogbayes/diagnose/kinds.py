@@ -69,6 +69,12 @@ class Kind:
     def columns(self, p: dict, cov) -> np.ndarray:
         raise NotImplementedError
 
+    def chunk_columns(self, p: dict, cov, state):
+        """Columns of one chunk of a record read in order, and the state the next chunk
+        needs (``state`` None on the first chunk). Equal to :meth:`columns` of the whole
+        record cut into pieces; only kinds with memory (a filter of the past) override it."""
+        return self.columns(p, cov), None
+
     def labels(self, p: dict) -> list[str]:
         return [self.name]
 
@@ -158,8 +164,12 @@ class Play(Kind):
     needs = {"channel": "int", "width": "pos"}
 
     def columns(self, p, cov):
+        return self.chunk_columns(p, cov, None)[0]
+
+    def chunk_columns(self, p, cov, state):
         T = _channel(cov, p["channel"])
-        return ((T - play(T, p["width"])) / (0.5 * p["width"]))[:, None]
+        P = play(T, p["width"], initial=state)
+        return ((T - P) / (0.5 * p["width"]))[:, None], float(P[-1])
 
     def describe(self, p, beta, se, t0):
         return {"width_degC": p["width"], "channel": p["channel"],
@@ -172,8 +182,18 @@ class Lag(Kind):
     needs = {"channel": "int", "tau": "pos", "centre": "num", "scale": "pos"}
 
     def columns(self, p, cov):
-        L = first_order_lag(cov.t, _channel(cov, p["channel"]), p["tau"])
-        return ((L - p["centre"]) / p["scale"])[:, None]
+        return self.chunk_columns(p, cov, None)[0]
+
+    def chunk_columns(self, p, cov, state):
+        t, u = cov.t, _channel(cov, p["channel"])
+        if state is None:
+            L = first_order_lag(t, u, p["tau"])
+        else:  # the previous chunk's last sample starts the recursion
+            t_prev, u_prev, L_prev = state
+            L = first_order_lag(np.concatenate([[t_prev], t]), np.concatenate([[u_prev], u]),
+                                p["tau"], initial=L_prev)[1:]
+        return ((L - p["centre"]) / p["scale"])[:, None], (float(t[-1]), float(u[-1]),
+                                                          float(L[-1]))
 
     def describe(self, p, beta, se, t0):
         return {"tau_s": p["tau"], "channel": p["channel"],

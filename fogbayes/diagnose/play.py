@@ -17,9 +17,8 @@ from .._numba import numba
 
 
 @numba.njit(cache=True)
-def _play(u: np.ndarray, h: float) -> np.ndarray:  # pragma: no cover - compiled
+def _play(u: np.ndarray, h: float, y: float) -> np.ndarray:  # pragma: no cover - compiled
     out = np.empty_like(u)
-    y = u[0]
     for i in range(u.size):
         x = u[i]
         if y < x - h:
@@ -30,9 +29,13 @@ def _play(u: np.ndarray, h: float) -> np.ndarray:  # pragma: no cover - compiled
     return out
 
 
-def play(u: np.ndarray, width: float) -> np.ndarray:
-    """P of ``u`` for a play of total ``width`` (module doc); width <= 0 returns ``u``."""
+def play(u: np.ndarray, width: float, *, initial: float | None = None) -> np.ndarray:
+    """P of ``u`` for a play of total ``width`` (module doc); width <= 0 returns ``u``.
+
+    ``initial``: the state before ``u[0]`` (a record read in chunks carries the last P);
+    by default P starts at ``u[0]``.
+    """
     u = np.ascontiguousarray(u, dtype=float)
     if width <= 0 or u.size == 0:
         return u.copy()
-    return _play(u, 0.5 * float(width))
+    return _play(u, 0.5 * float(width), float(u[0]) if initial is None else float(initial))

@@ -19,7 +19,7 @@ import numpy as np
 from .kinds import KINDS, kind_of
 from .lag import first_order_lag  # noqa: F401 -- re-exported (the loop's lag filter)
 
-__all__ = ["KINDS", "Term", "columns", "describe", "design", "labels"]
+__all__ = ["KINDS", "Term", "chunk_columns", "columns", "describe", "design", "labels"]
 
 
 class Term(NamedTuple):
@@ -46,6 +46,15 @@ def columns(term: Term, cov) -> np.ndarray:
 def design(terms: list[Term], cov) -> np.ndarray:
     """Columns of every term side by side (n, sum of n_cols)."""
     return np.column_stack([columns(tm, cov) for tm in terms])
+
+
+def chunk_columns(terms: list[Term], cov, states: list | None) -> tuple[list, list]:
+    """Each term's columns on one chunk of a record read in order, and the states the next
+    chunk needs (``states`` None on the first chunk): pieces of :func:`columns` of the
+    whole record (:meth:`~fogbayes.diagnose.kinds.Kind.chunk_columns`)."""
+    states = [None] * len(terms) if states is None else states
+    out = [kind_of(tm.kind).chunk_columns(tm.params, cov, st) for tm, st in zip(terms, states)]
+    return [c for c, _ in out], [st for _, st in out]
 
 
 def labels(term: Term) -> list[str]:

@@ -122,33 +122,63 @@ class Applied(NamedTuple):
     outside: list[dict]              # covariates outside the calibrated range
 
 
-def _term(d: dict) -> Term:
-    return Term(d["kind"], dict(d["params"]))
+def applied_terms(cal: dict, run_events: bool = False):
+    """(terms, coefficients, skipped) of a calibration applied to a new run: run events are
+    left out (and listed) unless ``run_events``; the kind decides, not the document."""
+    terms, beta, skipped, i = [], [], [], 0
+    for d in cal["terms"]:
+        tm = Term(d["kind"], dict(d["params"]))
+        k = tm.n_cols
+        if tm.applies == "run" and not run_events:
+            skipped.append({"effect": d.get("effect"), "kind": tm.kind,
+                            "why": "a run event of the calibration run (pass run events "
+                                   "to apply it)"})
+        else:
+            terms.append(tm)
+            beta.extend(cal["coefficients"][i:i + k])
+        i += k
+    return terms, np.asarray(beta, float), skipped
 
 
-def _outside(valid: dict, cov, names: list[str]) -> list[dict]:
-    """Share of samples whose covariates lie outside the calibration run's range."""
-    out = []
+class RangeCheck:
+    """Samples whose covariates lie outside the calibration run's range, counted over one
+    record or over the chunks of one (:meth:`add` each, then :meth:`report`)."""
 
-    def check(what, x, rng):
-        if x is None or rng is None:
-            return
-        lo, hi = rng
-        span = hi - lo
-        tol = 1e-6 * max(abs(lo), abs(hi), 1.0)  # the run's own ends are inside
-        n = int(np.count_nonzero((x < lo - tol) | (x > hi + tol)))
-        if n:
-            out.append({"covariate": what, "samples": n, "share": n / x.size,
-                        "calibrated": [lo, hi], "seen": [float(np.min(x)), float(np.max(x))],
-                        "beyond_by": float(max(lo - np.min(x), np.max(x) - hi, 0.0)),
-                        "calibrated_span": span})
+    def __init__(self, valid: dict, names: list[str]):
+        self.checks = [(f"temperature '{names[j]}' (deg C)", ("T", j), rng)
+                       for j, rng in enumerate(valid.get("temperature") or [])
+                       if j < len(names) and rng is not None]
+        for what, key, rng in (("dT/dt (deg C/min)", ("Tdot", None),
+                                valid.get("temperature_rate_degC_per_min")),
+                               ("input rate (deg/s)", ("omega", None),
+                                valid.get("input_rate_deg_s"))):
+            if rng is not None:
+                self.checks.append((what, key, rng))
+        self.n = 0
+        self.seen = {what: [0, np.inf, -np.inf] for what, _, _ in self.checks}
 
-    for j, rng in enumerate(valid.get("temperature") or []):
-        if j < cov.n_temps:
-            check(f"temperature '{names[j]}' (deg C)", cov.T[:, j], rng)
-    check("dT/dt (deg C/min)", cov.Tdot, valid.get("temperature_rate_degC_per_min"))
-    check("input rate (deg/s)", cov.omega, valid.get("input_rate_deg_s"))
-    return out
+    def add(self, cov) -> None:
+        for what, (field, j), (lo, hi) in self.checks:
+            x = getattr(cov, field)
+            if x is None:
+                continue
+            x = x[:, j] if j is not None else x
+            tol = 1e-6 * max(abs(lo), abs(hi), 1.0)  # the run's own ends are inside
+            s = self.seen[what]
+            s[0] += int(np.count_nonzero((x < lo - tol) | (x > hi + tol)))
+            s[1], s[2] = min(s[1], float(np.min(x))), max(s[2], float(np.max(x)))
+        self.n += int(cov.t.size)
+
+    def report(self) -> list[dict]:
+        out = []
+        for what, _, (lo, hi) in self.checks:
+            n, xmin, xmax = self.seen[what]
+            if n:
+                out.append({"covariate": what, "samples": n, "share": n / self.n,
+                            "calibrated": [lo, hi], "seen": [xmin, xmax],
+                            "beyond_by": float(max(lo - xmin, xmax - hi, 0.0)),
+                            "calibrated_span": hi - lo})
+        return out
 
 
 def apply_calibration(doc: dict, rec, *, run_events: bool = False) -> Applied:
@@ -168,19 +198,7 @@ def apply_calibration(doc: dict, rec, *, run_events: bool = False) -> Applied:
                       target_blocks=int(proc.get("target_blocks", TARGET_BLOCKS)))
     cov = covariates_of(rec, grid, rate_window_s=float(proc.get("rate_window_s",
                                                                   RATE_WINDOW_S)))
-    terms, beta, skipped, i = [], [], [], 0
-    for d in cal["terms"]:
-        tm = _term(d)
-        k = tm.n_cols
-        if tm.applies == "run" and not run_events:  # the kind decides, not the document
-            skipped.append({"effect": d.get("effect"), "kind": tm.kind,
-                            "why": "a run event of the calibration run (pass run events "
-                                   "to apply it)"})
-        else:
-            terms.append(tm)
-            beta.extend(cal["coefficients"][i:i + k])
-        i += k
-    beta = np.asarray(beta, float)
+    terms, beta, skipped = applied_terms(cal, run_events)
     cols = {"time": np.asarray(rec.time, float)}
     bias = None
     if cal["family"] == "composite":
@@ -190,5 +208,6 @@ def apply_calibration(doc: dict, rec, *, run_events: bool = False) -> Applied:
         cols["output"] = convert_rate(rate - bias, "deg/h", rec.unit,
                                       scale_factor=rec.scale_factor)
     cols["outlier"] = outlier | ~np.isfinite(cols["rate"]) if "rate" in cols else outlier
-    return Applied(cols, bias, skipped, _outside(cal.get("valid") or {}, cov,
-                                                 list(cov.names)))
+    ranges = RangeCheck(cal.get("valid") or {}, list(cov.names))
+    ranges.add(cov)
+    return Applied(cols, bias, skipped, ranges.report())

@@ -21,7 +21,7 @@ from ..diagnose.kinds import KINDS
 from ..data.doc_rules import (COEF_LIMIT, LOOP_SCHEMA, LOOP_SCHEMA_NAME, LOOP_SCHEMA_VERSION,
                               MAX_ORDER, FitDocumentError, _Checker, _kind, is_loop_document)
 
-__all__ = ["is_loop_document", "match_channels", "validate_loop_document"]
+__all__ = ["channel_order", "is_loop_document", "match_channels", "validate_loop_document"]
 
 FIX = "pass the document written by 'fogbayes loop --json' unchanged, or run the loop again"
 
@@ -140,8 +140,9 @@ def validate_loop_document(doc, source: str | None = None) -> dict:
     return doc
 
 
-def match_channels(doc: dict, rec):
-    """``rec`` with its temperature channels in the document's order (by name).
+def channel_order(doc: dict, have, source: str | None) -> list[int] | None:
+    """Indices of the document's temperature channels among ``have`` (names), in the
+    document's order; None to keep the recording's own order.
 
     A recording with exactly as many channels as the document, under other names, is taken
     in its own order (a renamed column is the common case); otherwise every name the
@@ -150,27 +151,34 @@ def match_channels(doc: dict, rec):
     from ..data.doc_rules import FitDocumentError as Err
 
     names = list(doc["input"].get("temperatures") or [])
-    have = list(rec.temperature_names)
+    have = list(have)
     used = sorted({int(t["params"][k]) for t in doc["calibration"]["terms"]
                    for k in _CHANNEL_KEYS if k in t["params"]})
     if not used:
-        return rec
+        return None
     if len(have) <= max(used):
         raise Err(f"the calibration uses {max(used) + 1} temperature channel(s) "
-                  f"({', '.join(names[:max(used) + 1])}); {rec.meta.source or 'the recording'} "
-                  f"has {len(have)}", file=rec.meta.source, key="input.temperatures",
+                  f"({', '.join(names[:max(used) + 1])}); {source or 'the recording'} "
+                  f"has {len(have)}", file=source, key="input.temperatures",
                   fix="give the channels with --temperature (e.g. --temperature "
                       + " --temperature ".join(names[:max(used) + 1]) + ")")
     if all(n in have for n in names):
-        import numpy as np
-
-        idx = [have.index(n) for n in names]
-        T = np.asarray(rec.temperatures)[:, idx]
-        return rec.replace(temperatures=T, temperature_names=tuple(names))
+        return [have.index(n) for n in names]
     missing = [names[j] for j in used if names[j] not in have]
     if missing and len(have) != len(names):
         raise Err(f"channel {missing[0]!r} of the calibration is not in "
-                  f"{rec.meta.source or 'the recording'} (it has {', '.join(have)})",
-                  file=rec.meta.source, key="input.temperatures",
+                  f"{source or 'the recording'} (it has {', '.join(have)})",
+                  file=source, key="input.temperatures",
                   fix="name the channels with --temperature in the calibration's order")
-    return rec
+    return None
+
+
+def match_channels(doc: dict, rec):
+    """``rec`` with its temperature channels in the document's order (:func:`channel_order`)."""
+    import numpy as np
+
+    idx = channel_order(doc, rec.temperature_names, rec.meta.source)
+    if idx is None:
+        return rec
+    names = tuple(doc["input"]["temperatures"])
+    return rec.replace(temperatures=np.asarray(rec.temperatures)[:, idx], temperature_names=names)

@@ -33,11 +33,12 @@ def _model(terms, beta, cov: Covariates) -> np.ndarray:
     return design(list(terms), cov) @ beta
 
 
-def rate_polynomial(terms, beta, cov: Covariates):
+def rate_polynomial(terms, beta, cov: Covariates, cols=None):
     """(a0, A_pos, A_neg, W_s): the model as a polynomial in w = W / W_s per sample.
 
     a0 (n,) is what does not depend on W; A_pos and A_neg (n, K) hold the coefficients of
-    w^1 .. w^K for W >= 0 and W < 0. W_s is the first rate term's scale.
+    w^1 .. w^K for W >= 0 and W < 0. W_s is the first rate term's scale. ``cols``: the
+    terms' columns on ``cov`` when already evaluated (a stream carries filter states).
     """
     n = cov.t.size
     parts, i = [], 0
@@ -55,10 +56,10 @@ def rate_polynomial(terms, beta, cov: Covariates):
     top = max(m for tm, _ in rate_terms for m, _ in kind_of(tm.kind).rate_powers(tm.params))
     a0 = np.zeros(n)
     pos, neg = np.zeros((n, top)), np.zeros((n, top))
-    for tm, b in parts:
+    for j, (tm, b) in enumerate(parts):
         powers = kind_of(tm.kind).rate_powers(tm.params)
         if not any(m for m, _ in powers):
-            a0 += columns(tm, cov) @ b
+            a0 += (columns(tm, cov) if cols is None else cols[j]) @ b
             continue
         s = float(tm.params["scale"])
         at_one = columns(tm, cov._replace(omega=np.full(n, s)))  # the factor at W = scale
@@ -69,16 +70,19 @@ def rate_polynomial(terms, beta, cov: Covariates):
     return a0, pos, neg, ws
 
 
-def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray) -> np.ndarray:
-    """W (deg/s) with model(W) = measured rate (deg/h), per sample (module doc)."""
-    a0, pos, neg, ws = rate_polynomial(terms, beta, cov)
+def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray, cols=None) -> np.ndarray:
+    """W (deg/s) with model(W) = measured rate (deg/h), per sample (module doc); ``cols``
+    as :func:`rate_polynomial`."""
+    a0, pos, neg, ws = rate_polynomial(terms, beta, cov, cols)
     slope = 0.5 * (pos[:, 0] + neg[:, 0])  # dU/dw at 0, the |W| term left out
-    u_s = max(float(np.max(np.abs(slope))), 1e-300)  # scaled units: full scale ~ 1
+    # Scaled units per sample (w ~ 1 at full scale, the residual check in units of w): a
+    # sample's solution then depends on that sample alone, as a stream's chunks need.
+    u_s = np.maximum(np.abs(slope), 1e-300)
     y = (np.asarray(rate_deg_h, float) - a0) / u_s
     up = y * slope >= 0  # the side of W = 0 the solution lies on
     # one solve, each sample with its side's polynomial; no cap besides the folds (a
     # polynomial monotone on a side has one root there)
-    w = invert_polynomial(np.where(up[:, None], pos, neg) / u_s, y, limit=np.inf)
+    w = invert_polynomial(np.where(up[:, None], pos, neg) / u_s[:, None], y, limit=np.inf)
     # the side must hold the solution (the other side's polynomial is not the model there)
     w = np.where((w >= 0) == up, w, np.where(np.abs(w) <= 1e-12, 0.0, np.nan))
     return w * ws

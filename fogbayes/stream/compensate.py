@@ -162,6 +162,7 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
 
 
 def _composite(source, fit, out, rows, include_time, dtype):
+    from ..composite.cells import operating_time_chunk
     from ..composite.workflow import compensator_from_fit
 
     unit = (fit.get("input") or {}).get("unit")
@@ -176,24 +177,16 @@ def _composite(source, fit, out, rows, include_time, dtype):
     fields = ("time", "output", "temperatures") + (("input_rate",) if by_cell else ())
     cols = {"time": np.float64} if include_time else {}
     cols.update(rate=dtype, outlier=np.bool_)
-    origin_t = prev_w = None
+    carry = origin_t = None
     n_out = 0
     with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
         for ch in source.chunks(rows, fields=fields):
             t = ch.time
             if by_cell:  # fogbayes.composite.cells.operating_time, carried across chunks
-                w = ch.input_rate
-                step = np.abs(np.diff(w, prepend=w[0] if prev_w is None else prev_w)) > 0.01
-                if prev_w is None:
-                    step[0] = True  # the record's first row is an origin
-                idx = np.maximum.accumulate(np.where(step, np.arange(t.size), -1))
-                origin = np.where(idx >= 0, t[np.maximum(idx, 0)],
-                                  origin_t if origin_t is not None else t[0])
-                origin_t, prev_w = float(origin[-1]), float(w[-1])
+                op, carry = operating_time_chunk(t, ch.input_rate, carry)
             else:
                 origin_t = float(t[0]) if origin_t is None else origin_t
-                origin = origin_t
-            op = t - origin
+                op = t - origin_t
             U, T = ch.output, ch.temperatures[:, 0]
             rate, ok = _pieces(lambda a, b, c: tuple(comp(a, b, c)), rows, U, T, op)
             mask = ~np.asarray(ok)

@@ -6,11 +6,9 @@ record: the gap rule (a step longer than ``gap_factor`` median steps, see
 the block-grid slack, the sample rate of :attr:`fogbayes.data.Recording.sample_rate`. A
 streaming computation must make the same choices, so it needs the same median, exactly:
 
-* the median is found by radix selection on the IEEE bit patterns of the steps (positive
-  doubles order like their bits as integers): each pass over the time column histograms the
-  next 16 bits of the steps that share the prefix found so far (65 536 counters), at most
-  four passes, fewer when every step in the bucket is equal (the min and max of the bucket
-  are tracked). For an even count it is the mean of the two middle steps, as ``np.median``.
+* the median is found by radix selection (:func:`.select.stream_median`): at most four
+  passes over the time column, fewer when the steps in the chosen bucket are all equal; for
+  an even count it is the mean of the two middle steps, as ``np.median``.
 * one more pass records the gaps and, per run between gaps, its first and last row, first
   time, and the min, max and mean of its steps (the Savitzky-Golay code treats a run whose
   steps vary by <= 1e-9 as an exact grid with step = their mean). Memory: O(number of runs).
@@ -25,9 +23,8 @@ import numpy as np
 
 from ..errors import TooShortError
 from ..preprocess._checks import GAP_FACTOR
+from .select import stream_median
 from .sources import DEFAULT_ROWS, RecordSource
-
-_DIGIT = 16
 
 
 class TimeScan(NamedTuple):
@@ -63,51 +60,14 @@ class TimeScan(NamedTuple):
 
 
 def _steps(source: RecordSource, rows: int):
-    """(first row of the chunk's steps, steps as int64 bits, steps) over the time column."""
+    """The time steps, chunk by chunk (step i lies between rows i-1 and i)."""
     last = None
     for ch in source.chunks(rows, fields=("time",)):
         t = ch.time
         dt = np.diff(t) if last is None else np.diff(t, prepend=last)
-        first = ch.start + (1 if last is None else 0)  # step i lies between rows i-1 and i
         last = float(t[-1])
         if dt.size:
-            yield first, dt.view(np.int64), dt
-
-
-def _select(source: RecordSource, rows: int, ranks: list[int]) -> tuple[dict[int, float], int]:
-    """Exact order statistics (0-based ranks) of the steps by 16-bit radix passes."""
-    state = {r: (0, 0, r) for r in ranks}  # rank -> (prefix, prefix bits, rank inside)
-    found: dict[int, float] = {}
-    passes = 0
-    while len(found) < len(ranks):
-        todo = {(p, bits) for r, (p, bits, _) in state.items() if r not in found}
-        hist = {key: np.zeros(1 << _DIGIT, np.int64) for key in todo}
-        lo = {key: np.inf for key in todo}
-        hi = {key: -np.inf for key in todo}
-        passes += 1
-        for _, b, dt in _steps(source, rows):
-            for (p, bits) in todo:
-                shift = 64 - bits - _DIGIT
-                sel = b if bits == 0 else b[(b >> (64 - bits)) == p]
-                v = dt if bits == 0 else dt[(b >> (64 - bits)) == p]
-                if sel.size:
-                    hist[p, bits] += np.bincount((sel >> shift) & 0xFFFF, minlength=1 << _DIGIT)
-                    lo[p, bits] = min(lo[p, bits], float(v.min()))
-                    hi[p, bits] = max(hi[p, bits], float(v.max()))
-        for r, (p, bits, k) in list(state.items()):
-            if r in found:
-                continue
-            if lo[p, bits] == hi[p, bits]:  # every step in this bucket is equal
-                found[r] = lo[p, bits]
-                continue
-            cum = np.cumsum(hist[p, bits])
-            d = int(np.searchsorted(cum, k, side="right"))
-            k -= int(cum[d - 1]) if d else 0
-            p, bits = (p << _DIGIT) | d, bits + _DIGIT
-            if bits == 64:
-                found[r] = float(np.array([p], np.int64).view(np.float64)[0])
-            state[r] = (p, bits, k)
-    return found, passes
+            yield dt
 
 
 def scan_time(source: RecordSource, *, rows: int = DEFAULT_ROWS,
@@ -117,10 +77,7 @@ def scan_time(source: RecordSource, *, rows: int = DEFAULT_ROWS,
     if source.n < 2:
         raise TooShortError(f"needs at least 2 samples, got {source.n}", file=source.source,
                             column=source.time_name, fix="pass a longer record")
-    m = source.n - 1
-    ranks = sorted({(m - 1) // 2, m // 2})
-    found, passes = _select(source, rows, ranks)
-    med = float((found[ranks[0]] + found[ranks[-1]]) / 2.0) if len(ranks) == 2 else found[ranks[0]]
+    med, passes = stream_median(lambda: _steps(source, rows), source.n - 1)
     limit = gap_factor * med
     starts, t0s, tl, mins, maxs, sums, counts = [0], [], [], [], [], [], []
     cur = {"min": np.inf, "max": -np.inf, "sum": [], "count": 0}

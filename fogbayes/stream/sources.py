@@ -27,7 +27,6 @@ Formats (the column contract of :mod:`fogbayes.data.io`):
 from __future__ import annotations
 
 import difflib
-import re
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import NamedTuple
@@ -43,6 +42,8 @@ from ..errors import (
     ShapeError,
     TimeOrderError,
 )
+from ..data.temperature_columns import META_KEY as TEMPERATURES_KEY
+from ..data.temperature_columns import temperature_columns
 from ..units import normalise_unit
 from .formats import (
     _NpyStream,
@@ -54,8 +55,6 @@ from .formats import (
 )
 
 DEFAULT_ROWS = 1 << 20  # rows per chunk: 8 MB per float64 column
-_TEMP_RE = re.compile(r"^temperature(_\d+)?$")
-_META_KEYS = ("unit", "sensor_id", "sample_rate", "scale_factor")
 
 
 class Chunk(NamedTuple):
@@ -232,8 +231,7 @@ def open_source(path, *, time: str = "time", output: str = "output",
         raise EmptyRecordingError("the file holds no columns", file=src,
                                   fix="check the file was written completely")
     if temperature is None:
-        tnames = sorted((c for c in cols if _TEMP_RE.match(c)),
-                        key=lambda c: 1 if c == "temperature" else int(c.rsplit("_", 1)[1]))
+        tnames = temperature_columns(cols, meta.get(TEMPERATURES_KEY), src)
     else:
         tnames = [temperature] if isinstance(temperature, str) else list(temperature)
     rate = input_rate if input_rate and (input_rate in cols or input_rate != "input_rate") else None
