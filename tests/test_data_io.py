@@ -85,3 +85,30 @@ def test_recording_is_immutable():
     rec = _rec()
     with pytest.raises(ValueError):
         rec.output[0] = 1.0
+
+
+@pytest.mark.parametrize("ext", ["csv", "npz", "parquet"])
+def test_channels_under_any_name_survive_a_round_trip(tmp_path, ext):
+    """save wrote 'T_case'/'T_fibre' columns that load (and --stream) then ignored: the
+    channels were dropped without a word. The metadata now lists them."""
+    from fogbayes.errors import MetadataError
+    from fogbayes.stream import open_source
+
+    T = np.column_stack([np.linspace(20, 30, 50), np.linspace(21, 31, 50)])
+    rec = Recording(time=np.arange(50.0), output=np.zeros(50), temperatures=T,
+              temperature_names=("T_case", "T_fibre"))
+    path = save(rec, tmp_path / f"r.{ext}")
+    back = load(path)
+    assert back.temperature_names == ("T_case", "T_fibre")
+    np.testing.assert_array_equal(back.temperatures, T)
+    assert "temperatures" not in back.meta.extra
+    if ext != "csv":
+        assert open_source(path).temperature_names == ("T_case", "T_fibre")
+    plain = save(Recording(time=np.arange(50.0), output=np.zeros(50), temperatures=T),
+                 tmp_path / f"p.{ext}")
+    assert load(plain).temperature_names == ("temperature", "temperature_2")
+    if ext == "csv":  # a listed column that is gone: said, not skipped
+        edited = path.read_text().replace(",T_fibre", ",T_other")  # the header, not the list
+        (tmp_path / "edited.csv").write_text(edited)
+        with pytest.raises(MetadataError, match="T_fibre"):
+            load(tmp_path / "edited.csv")
