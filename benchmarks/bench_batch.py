@@ -44,14 +44,14 @@ from fogbayes.batch import fit_vectorized, kernels, run_batch
 from fogbayes.batch.vectorized import _exponents
 from fogbayes.batch.xla import batched_solver, solve_one, unit_basis
 from fogbayes.data.io import save
-from fogbayes.models.thermal import ThermalSpec, thermal_basis
+from fogbayes.thermal.model import ThermalSpec, thermal_basis
 from fogbayes.simulate.scenarios import simulate
-from fogbayes.workflow._thermal_data import (
+from fogbayes.thermal.data import (
     fit_blocks,
     make_processing,
     sample_covariates,
 )
-from fogbayes.workflow.thermal import fit_recording
+from fogbayes.thermal.workflow import fit_recording
 
 
 def best(fn, repeat=3):

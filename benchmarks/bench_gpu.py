@@ -40,9 +40,9 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import fogbayes  # noqa: E402  (float64 on)
-from fogbayes.compensate import bias_compensator, compensate_bias  # noqa: E402
+from fogbayes.thermal.compensate import bias_compensator, compensate_bias  # noqa: E402
 from fogbayes.models.polynomial import design  # noqa: E402
-from fogbayes.models.thermal import ThermalSpec, thermal_basis  # noqa: E402
+from fogbayes.thermal.model import ThermalSpec, thermal_basis  # noqa: E402
 
 
 def best(fn, repeat: int) -> tuple[float, object]:

@@ -379,7 +379,7 @@ def measured(args) -> None:
     import fogbayes  # noqa: F401
     from fogbayes.data import Metadata, Recording
     from fogbayes.loop import run_loop
-    from fogbayes.workflow.pan_tvac import load_pan_tvac
+    from fogbayes.thermal.pan_tvac import load_pan_tvac
 
     shared = os.environ.get("FOGBAYES_SHARED", os.path.join(os.path.dirname(__file__), "..", "..", "shared"))
     d = np.load(os.path.join(shared, "data/measured/adis16405_static_ucalgary/adis_16405_imu1.npz"))

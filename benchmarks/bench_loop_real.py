@@ -140,7 +140,7 @@ def run_case(case: dict) -> dict:
     from fogbayes.loop import run_loop
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.noise_model import components
-    from fogbayes.workflow import thermal
+    from fogbayes.thermal import workflow as thermal
 
     rec, true_det, effect_col = build(case)
     t0 = time.time()

@@ -78,7 +78,7 @@ def run_case(case: dict) -> dict:
 
     from fogbayes.loop.metrics import block_rms
     from fogbayes.simulate.scenarios import simulate
-    from fogbayes.workflow import thermal
+    from fogbayes.thermal import workflow as thermal
 
     law, s = _law(case["effect"]), case["seed"]
     a = simulate("thermal", seed=s, fs=1.0, duration=3 * 3600.0, effects=law,

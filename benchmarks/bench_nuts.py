@@ -192,7 +192,7 @@ def arma(sizes):
 
 def thermal(sizes):
     from fogbayes.simulate import simulate
-    from fogbayes.workflow.thermal import fit_recording
+    from fogbayes.thermal.workflow import fit_recording
 
     c, w, s = sizes(2, 500, 1000)
     rec = simulate("thermal", seed=1, duration=3600.0, fs=1.0).recording

@@ -57,8 +57,8 @@ def header() -> dict:
 # ------------------------------------------------------------------------------- large
 def bias_t_fit() -> dict:
     from fogbayes.export import coefficient_document
-    from fogbayes.models.thermal import bias_t_spec, thermal_basis
-    from fogbayes.workflow._thermal_data import make_processing
+    from fogbayes.thermal.model import bias_t_spec, thermal_basis
+    from fogbayes.thermal.data import make_processing
 
     spec = bias_t_spec(3)
     basis = thermal_basis(spec, np.array([[-40.0], [60.0]]))
@@ -128,7 +128,7 @@ def prefix_equality(d: Path, work: Path, n: int) -> dict:
     from fogbayes.stats.allan_kernels import allan_variance
     from fogbayes.stats.taus import cluster_sizes
     from fogbayes.stream import compensate_stream, stream_allan
-    from fogbayes.workflow.thermal import compensate_recording
+    from fogbayes.thermal.workflow import compensate_recording
 
     pre = work / "prefix"
     pre.mkdir(parents=True, exist_ok=True)
@@ -191,10 +191,10 @@ def large(args) -> dict:
 def roofline(args) -> dict:
     import jax
 
-    from fogbayes.compensate import bias_compensator
+    from fogbayes.thermal.compensate import bias_compensator
     from fogbayes.composite.compensate import build_compensator, compensate_numpy
     from fogbayes.composite.model import PAPER_000, Scaling, from_raw, raw_predict
-    from fogbayes.models.thermal import ThermalSpec, bias_t_spec, thermal_basis
+    from fogbayes.thermal.model import ThermalSpec, bias_t_spec, thermal_basis
     from fogbayes.models.polynomial import design
 
     n, c, rep = args.n, args.chunk, args.repeat

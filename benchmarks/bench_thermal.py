@@ -33,12 +33,12 @@ import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
 from _timing import best_of  # benchmarks/ is on sys.path when a script runs
-from fogbayes.compensate import compensate_bias
+from fogbayes.thermal.compensate import compensate_bias
 from fogbayes.inference.lsq import lstsq, lstsq_gram
 from fogbayes.metrics import bias_stability
 from fogbayes.simulate import simulate
 from fogbayes.simulate.noise import markov_noise
-from fogbayes.workflow.thermal import compensate_recording, fit_recording
+from fogbayes.thermal.workflow import compensate_recording, fit_recording
 
 
 def _timed(fn):
@@ -101,7 +101,7 @@ def speed(scale: float, repeat: int, sensors: int) -> dict:
 def batch_fit(sensors: int, repeat: int) -> dict:
     """1 000 sensors in one chamber: shared profile, own coefficients, coloured noise."""
     from fogbayes.models.polynomial import design
-    from fogbayes.models.thermal import ThermalSpec, thermal_basis
+    from fogbayes.thermal.model import ThermalSpec, thermal_basis
     from fogbayes.preprocess import block_average
     from fogbayes.preprocess.temperature_rate import temperature_rate_per_min
 

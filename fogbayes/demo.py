@@ -34,7 +34,7 @@ def run_demo(out_dir: str | Path = "fogbayes_demo", *, seed: int = 0, duration: 
     """Run the demonstration and write ``report.html`` and the recording into ``out_dir``."""
     from .simulate import simulate
     from .stats.allan import allan_deviation
-    from .workflow.thermal import compensate_recording, fit_recording
+    from .thermal.workflow import compensate_recording, fit_recording
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from fogbayes.batch import prepare
-from fogbayes.models.thermal import ThermalSpec
+from fogbayes.thermal.model import ThermalSpec
 from fogbayes.preprocess.temperature_rate import temperature_rate
 from fogbayes.simulate.scenarios import simulate
-from fogbayes.workflow._thermal_data import fit_blocks, make_processing, sample_covariates
-from fogbayes.workflow.thermal import thermal_segments
+from fogbayes.thermal.data import fit_blocks, make_processing, sample_covariates
+from fogbayes.thermal.workflow import thermal_segments
 
 RTOL = 1e-12  # sums in another order: rounding only
 

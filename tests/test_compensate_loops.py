@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.compensate import bias_compensator
-from fogbayes.compensate_loops import compensate_into
+from fogbayes.thermal.compensate import bias_compensator
+from fogbayes.thermal.compensate_loops import compensate_into
 from fogbayes.models.polynomial import design, make_basis
 
 CASES = {
@@ -87,7 +87,7 @@ def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
 def test_the_numpy_path_is_the_loops_arithmetic(case):
     """A one-off call (no loop compiled yet, few samples) runs in NumPy, term by term in the
     loop's order: the same numbers to a rounding, and no compilation (0.7 s) is paid."""
-    from fogbayes import compensate_loops as cl
+    from fogbayes.thermal import compensate_loops as cl
 
     names, terms = CASES[case]
     rng = np.random.default_rng(7 + len(terms))

@@ -317,7 +317,7 @@ PAN_ARGS = ["--time-column", "time (ms)", "--time-unit", "ms", "--column", "gyro
 
 @pytest.mark.measured
 def test_pan_tvac_file_loads_through_the_cli_like_the_recipe(measured, capsys):
-    from fogbayes.workflow.pan_tvac import load_pan_tvac
+    from fogbayes.thermal.pan_tvac import load_pan_tvac
 
     path = measured(*PAN)
     rc, out, err = run(capsys, "info", path, *PAN_ARGS, "--json", "-")

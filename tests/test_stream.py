@@ -299,7 +299,7 @@ def thermal_run(tmp_path_factory):
     ("thermal", {"rate_method": "difference"}, 2000, "odir"),  # block differences, interp
 ])
 def test_thermal_compensation_is_bit_identical(thermal_run, tmp_path, model, opts, rows, out):
-    from fogbayes.workflow.thermal import compensate_recording, fit_recording
+    from fogbayes.thermal.workflow import compensate_recording, fit_recording
 
     rec, part, path = thermal_run
     fit = fit_recording(rec, model=model, **opts)
@@ -319,10 +319,10 @@ def test_fused_compensator_equals_the_design_matrix_formula(thermal_run):
     # and 1/scale: a couple of roundings per term. The terms (|coef_k| times scaled
     # monomials, |.| <= 1 in range) cancel to a small bias, so the yardstick is their sum:
     # bound 2 p eps (|y| + sum |coef|) ~ 2e-14 deg/h; measured 2.7e-15
-    from fogbayes.compensate import compensate_bias
+    from fogbayes.thermal.compensate import compensate_bias
     from fogbayes.export import basis_from_dict
     from fogbayes.models.polynomial import design
-    from fogbayes.workflow.thermal import fit_recording
+    from fogbayes.thermal.workflow import fit_recording
 
     rec, part, _ = thermal_run
     fit = fit_recording(rec, model="thermal")
@@ -339,7 +339,7 @@ def test_fused_compensator_equals_the_design_matrix_formula(thermal_run):
 
 
 def test_long_savgol_window_agrees_to_fft_rounding(thermal_run, tmp_path):
-    from fogbayes.workflow.thermal import compensate_recording, fit_recording
+    from fogbayes.thermal.workflow import compensate_recording, fit_recording
 
     rec, part, path = thermal_run
     fit = fit_recording(rec, model="thermal", rate_window_s=1000.0)  # 1001 samples: FFT path
@@ -407,8 +407,8 @@ print(json.dumps(out))
 
 def _rss_record(d, n):
     from fogbayes.export import coefficient_document
-    from fogbayes.models.thermal import bias_t_spec, thermal_basis
-    from fogbayes.workflow._thermal_data import make_processing
+    from fogbayes.thermal.model import bias_t_spec, thermal_basis
+    from fogbayes.thermal.data import make_processing
 
     d.mkdir()
     rng = np.random.default_rng(0)

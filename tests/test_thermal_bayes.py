@@ -19,9 +19,9 @@ from fogbayes.inference.bayes import fit_linear_bayes, fit_linear_bayes_batch
 from fogbayes.inference.compare import compare, loo, waic
 from fogbayes.inference.lsq import lstsq
 from fogbayes.models.polynomial import design, from_raw
-from fogbayes.models.thermal import ThermalSpec, thermal_basis
+from fogbayes.thermal.model import ThermalSpec, thermal_basis
 from fogbayes.simulate import simulate
-from fogbayes.workflow._thermal_data import coarser_blocks, fit_blocks, make_processing, sample_covariates
+from fogbayes.thermal.data import coarser_blocks, fit_blocks, make_processing, sample_covariates
 
 SPEC = ThermalSpec(2, 2)
 
@@ -116,7 +116,7 @@ def test_white_and_ar_posteriors_against_references():
 
 
 def test_order_selection_by_loo_under_ar_noise():
-    from fogbayes.workflow.thermal import fit_recording
+    from fogbayes.thermal.workflow import fit_recording
 
     # truth: order 2 in T and 1 in dT/dt; a linear-in-T model misses the curvature badly
     sim = simulate("paper004", seed=7, soak=1800.0, ramp_rate=2.0,

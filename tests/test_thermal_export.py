@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.compensate import bias_compensator, compensate_bias, compensate_chunks
+from fogbayes.thermal.compensate import bias_compensator, compensate_bias, compensate_chunks
 from fogbayes.export import (
     DEG_H_TO_RAD_S,
     ExportError,
@@ -16,7 +16,7 @@ from fogbayes.export import (
     px4_param_file,
 )
 from fogbayes.models.polynomial import evaluate, make_basis
-from fogbayes.models.thermal import ThermalSpec, bias_t_spec, thermal_basis
+from fogbayes.thermal.model import ThermalSpec, bias_t_spec, thermal_basis
 
 RNG = np.random.default_rng(11)
 

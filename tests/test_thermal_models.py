@@ -19,7 +19,7 @@ from fogbayes.models.polynomial import (
     rebase_matrix,
     to_raw,
 )
-from fogbayes.models.thermal import (
+from fogbayes.thermal.model import (
     OrderError,
     ThermalSpec,
     bias_t_spec,

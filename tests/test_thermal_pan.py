@@ -1,6 +1,6 @@
 """Measured data: the PAN ETU gyro (LSM6DSM) cooled in a thermal-vacuum chamber.
 
-Recipe (fogbayes.workflow.pan_tvac, SOURCE.md): gyro x 0.5, T = int16(raw)/256 + 25 deg C.
+Recipe (fogbayes.thermal.pan_tvac, SOURCE.md): gyro x 0.5, T = int16(raw)/256 + 25 deg C.
 Per axis: bias-t (order 1) fitted with AR(1) posterior intervals, compensated, bias
 stability on 1 s averages before/after (the bursts are 5 s long: no 10 s or 100 s window).
 
@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from _measured import measured_path
 
-from fogbayes.workflow.pan_tvac import PAN_OPTIONS, load_pan_tvac
-from fogbayes.workflow.thermal import compensate_recording, fit_recording
+from fogbayes.thermal.pan_tvac import PAN_OPTIONS, load_pan_tvac
+from fogbayes.thermal.workflow import compensate_recording, fit_recording
 
 pytestmark = pytest.mark.measured
 FILE = ("pan_lsm6dsm_tvac_cold", "TVCtest3_7_20.csv")

@@ -18,7 +18,7 @@ import pytest
 
 from fogbayes.metrics import bias_stability, improvement_pct
 from fogbayes.simulate import simulate
-from fogbayes.workflow.thermal import compensate_recording, fit_recording
+from fogbayes.thermal.workflow import compensate_recording, fit_recording
 
 TMP461_STEP = 0.0625  # deg C
 NOISE = {

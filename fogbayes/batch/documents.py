@@ -1,6 +1,6 @@
 """The fit documents of a vectorised fleet fit, as ``fit_recording`` writes them.
 
-Same keys in the same order as :func:`fogbayes.workflow.thermal.fit_recording`'s document;
+Same keys in the same order as :func:`fogbayes.thermal.workflow.fit_recording`'s document;
 the raw coefficients (powers of the covariates, the papers' form) of all sensors come from
 one batched change of basis (:func:`fogbayes.models.polynomial.rebase_matrices`),
 ``raw = M b``, ``Cov_raw = M Cov M^T``.

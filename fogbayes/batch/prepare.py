@@ -1,6 +1,6 @@
 """Per-sample covariates, fit blocks and thermal segments of many sensors at once.
 
-The single-recording workflow (:mod:`fogbayes.workflow._thermal_data`) computes, per
+The single-recording workflow (:mod:`fogbayes.thermal.data`) computes, per
 recording, the covariates z (T, dT/dt by a Savitzky-Golay slope, ...), the block means the
 fit uses, and the soak/ramp segments of the metrics. Sensors of one rig share a clock, so
 for each group of recordings with identical time stamps this module does each step once for
@@ -26,11 +26,11 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError
-from ..models.thermal import temperature_rate_of, thermal_covariates
+from ..thermal.model import temperature_rate_of, thermal_covariates
 from ..preprocess.blocks import block_index
 from ..preprocess.segments import segment_thermal_rows
-from ..workflow._thermal_data import Blocks, fit_blocks, sample_covariates
-from ..workflow.thermal import thermal_segments
+from ..thermal.data import Blocks, fit_blocks, sample_covariates
+from ..thermal.workflow import thermal_segments
 from . import kernels
 
 

@@ -1,6 +1,6 @@
 """``bias-t`` / ``thermal`` fits of many same-shape recordings in one batched pass.
 
-The per-recording workflow (:func:`fogbayes.workflow.thermal.fit_recording`) is
+The per-recording workflow (:func:`fogbayes.thermal.workflow.fit_recording`) is
 
 1. covariates per sample and 1 s block means (data-dependent gaps and masks),
 2. order choice (only when several orders are asked for),
@@ -42,14 +42,14 @@ import numpy as np
 from ..errors import FogbayesError, TooShortError
 from ..metrics import DEFAULT_WINDOWS
 from ..models.polynomial import PolyBasis, range_scaling
-from ..models.thermal import covariate_names, thermal_terms
-from ..workflow._thermal_data import (
+from ..thermal.model import covariate_names, thermal_terms
+from ..thermal.data import (
     Processing,
     fit_blocks,
     make_processing,
     sample_covariates,
 )
-from ..workflow.thermal import (
+from ..thermal.workflow import (
     MODELS,
     model_spec,
     parse_orders,
@@ -110,7 +110,7 @@ def _prepare_all(recs, spec, proc, on_error, groups) -> tuple[list[int], np.ndar
 
 def _check_blocks(rec, n_blocks: int, spec) -> None:
     p = _n_terms(spec)
-    if n_blocks < p + 2:  # the workflow's own limit (workflow.thermal._lsq)
+    if n_blocks < p + 2:  # the workflow's own limit (thermal.workflow._lsq)
         raise TooShortError(f"{n_blocks} block means cannot fit {p} coefficients",
                             file=rec.meta.source, column="output",
                             fix="record longer, average over shorter blocks or lower the order")

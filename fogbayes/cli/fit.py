@@ -23,7 +23,7 @@ from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, channels, fit_channels
 #: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
 #: here so that ``-O n_sigma=abc`` is one line naming the option, not a traceback.
 _OPTION_TYPES = {
-    # thermal processing (fogbayes.workflow._thermal_data.Processing) and model structure
+    # thermal processing (fogbayes.thermal.data.Processing) and model structure
     "processing": "text", "average_s": "positive", "temperature_average_s": "positive",
     "rate_method": "text", "rate_window_s": "positive", "outliers": "text",
     "n_sigma": "positive", "rate_gap_factor": "positive or null", "cross": "bool",

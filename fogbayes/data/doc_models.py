@@ -109,8 +109,8 @@ _WINDOWS = ("average_s", "temperature_average_s", "rate_window_s")
 
 
 def _thermal(doc: dict, v: _Checker) -> None:
-    from ..models.thermal import ThermalSpec, covariate_names, thermal_terms
-    from ..workflow._thermal_data import Processing
+    from ..thermal.model import ThermalSpec, covariate_names, thermal_terms
+    from ..thermal.data import Processing
 
     _input(doc, v)
     _optional_objects(doc, v, ("outliers", "fit", "metrics", "order_selection", "bayes",

@@ -13,7 +13,7 @@
                five-term model, and the loop may add only noise terms: a Gauss-Markov
                component or a sinusoid (``markov_noise``, ``periodic``).
 
-Orders use ``fogbayes fit``'s grammar (:mod:`fogbayes.workflow.thermal`): bias-t "n";
+Orders use ``fogbayes fit``'s grammar (:mod:`fogbayes.thermal.workflow`): bias-t "n";
 thermal "n" (T and dT/dt both n) or "n,m"; ``fogbayes fit --estimator gls`` is this loop's
 fit of these terms with no step added (:mod:`fogbayes.loop.gls_fit`).
 
@@ -21,7 +21,7 @@ T' = (T - centre) / scale and W' = W / max|W| (centred, scaled bases). On a soak
 record (T spans < 0.1 deg C) the temperature terms are left out: no T law is identifiable.
 
 Why ``bias-t`` starts at order 2 here while ``fogbayes fit --model bias-t`` defaults to 3
-(:mod:`fogbayes.workflow.thermal`): the fit has no way to ask whether a higher power is
+(:mod:`fogbayes.thermal.workflow`): the fit has no way to ask whether a higher power is
 supported, so it takes a safe order (or chooses one with ``auto``); the loop does ask --
 ``temperature_order`` is one of its candidates and is added only on calibrated evidence.
 Starting from the paper 004 order (2) lets the loop show a cubic as a justified step with

@@ -38,7 +38,7 @@ from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from .._lazy import host_device
 from ..inference import noise_ssm as ns
-from ..workflow.thermal import DEFAULT_ORDERS
+from ..thermal.workflow import DEFAULT_ORDERS
 from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, base_terms

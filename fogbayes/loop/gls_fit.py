@@ -14,7 +14,7 @@ estimator) are too small by the square root of the noise's long-memory variance 
 This is the same code path as ``fogbayes loop --max-steps 0`` with the same orders: one
 estimator, one document (the loop document, ``fogbayes.loop/1``), which ``compensate``,
 ``report``, ``batch`` and ``stream`` read like a fit document. What differs from the loop
-is only the default orders: the fit's (:data:`fogbayes.workflow.thermal.DEFAULT_ORDERS`,
+is only the default orders: the fit's (:data:`fogbayes.thermal.workflow.DEFAULT_ORDERS`,
 bias-t 3), since a fit has no step that could add a higher power (see
 :mod:`fogbayes.loop.bases` for why the loop starts at 2).
 """
@@ -24,7 +24,7 @@ from __future__ import annotations
 import re
 
 from ..errors import ArgumentError
-from ..workflow.thermal import DEFAULT_ORDERS
+from ..thermal.workflow import DEFAULT_ORDERS
 
 MODELS = ("bias-t", "thermal")
 #: as ``fogbayes loop``: fewer samples leave the noise model without data

@@ -1,6 +1,6 @@
 """Compensate a record larger than memory, chunk by chunk, into a file.
 
-:func:`compensate_stream` does what :func:`fogbayes.workflow.thermal.compensate_recording`
+:func:`compensate_stream` does what :func:`fogbayes.thermal.workflow.compensate_recording`
 (``bias-t``, ``thermal``) and :func:`fogbayes.composite.workflow.compensate_recording`
 (``composite``) do, with the same jitted compensators, one fixed-size chunk at a time (the
 last chunk is padded to that size, so the compensator compiles once):
@@ -104,11 +104,11 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
 
 
 def _thermal(source, fit, out, rows, flags, include_time, dtype):
-    from ..compensate import bias_compensator
+    from ..thermal.compensate import bias_compensator
     from ..export import basis_from_dict
-    from ..models.thermal import ThermalSpec
-    from ..workflow._thermal_data import Processing
-    from ..workflow.thermal import check_fit_document, clamp_covariates
+    from ..thermal.model import ThermalSpec
+    from ..thermal.data import Processing
+    from ..thermal.workflow import check_fit_document, clamp_covariates
 
     check_fit_document(fit)
     p = fit["params"]

@@ -1,6 +1,6 @@
 """Thermal-model covariates (T, dT/dt, extra channels) of a streamed record, chunk by chunk.
 
-:func:`fogbayes.models.thermal.thermal_covariates` works on the whole record. The
+:func:`fogbayes.thermal.model.thermal_covariates` works on the whole record. The
 temperature rate is not local: a Savitzky-Golay derivative looks ``w // 2`` samples each way
 and fits the ``w`` first/last samples of each run between gaps; the block-difference rate
 (``difference``, paper 004's ``paper``) uses the means of the neighbouring blocks, on a grid
@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError, MissingColumnError, TooShortError
-from ..models.thermal import ThermalSpec
+from ..thermal.model import ThermalSpec
 from ..preprocess.temperature_rate import (
     _whole_run_slope,
     local_poly_slope,

@@ -3,7 +3,8 @@
 ``fit_recording(rec, *, model, orders=None, bayes=False, seed=0, **options) -> dict`` and
 ``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (docs/DESIGN.md / contracts):
 
-* :mod:`.thermal`   -- ``bias-t`` and ``thermal`` (paper 004)
+* :mod:`fogbayes.thermal.workflow` -- ``bias-t`` and ``thermal`` (paper 004; the family's
+  package)
 * :mod:`fogbayes.composite.workflow` -- ``composite`` (paper 000; the family's package)
 * :mod:`.allan`     -- ``allan`` (five-term Allan model)
 * :mod:`.arma`      -- ``arma`` (paper 002 drift model; nothing to compensate)
@@ -20,7 +21,7 @@ from types import ModuleType
 from ..errors import FogbayesError
 
 #: model name -> workflow module (relative to this package)
-MODULES = {"bias-t": ".thermal", "thermal": ".thermal", "composite": "..composite.workflow",
+MODULES = {"bias-t": "..thermal.workflow", "thermal": "..thermal.workflow", "composite": "..composite.workflow",
            "allan": ".allan", "arma": ".arma"}
 
 

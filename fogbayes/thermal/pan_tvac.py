@@ -55,7 +55,7 @@ def load_pan_tvac(path: str | Path, axis: str = "x") -> Recording:
                                      file=str(path), column=col,
                                      fix="use the TVCtest3_7_20.csv file described in SOURCE.md")
     meta = Metadata(sensor_id=f"PAN-ETU-LSM6DSM-{axis}", sample_rate=50.0, source=str(path),
-                    extra={"recipe": "fogbayes.workflow.pan_tvac", "gyro_factor": GYRO_FACTOR,
+                    extra={"recipe": "fogbayes.thermal.pan_tvac", "gyro_factor": GYRO_FACTOR,
                            "temperature": "int16(raw)/256 + 25 degC (inferred scale)"})
     return Recording(time=df["time (ms)"].to_numpy(float) / 1000.0,
                      output=GYRO_FACTOR * df[_COLUMNS[axis]].to_numpy(float), unit="rad/s",

@@ -21,7 +21,7 @@ Temperature rate (:func:`thermal_covariates`): ``method="paper"`` is paper 004's
 (temperature averaged over ``window_s`` = 10 s blocks, consecutive block means differenced
 and held over the block); ``"difference"`` centres the same differences (no lag);
 ``"savgol"`` is a centred Savitzky-Golay smoothing derivative (see
-:mod:`fogbayes.workflow.thermal` for the default and why).
+:mod:`fogbayes.thermal.workflow` for the default and why).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError, MissingColumnError
-from .polynomial import PolyBasis, make_basis
+from ..models.polynomial import PolyBasis, make_basis
 
 T_NAME = "T"
 RATE_NAME = "dT/dt"

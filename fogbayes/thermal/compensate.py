@@ -9,7 +9,7 @@ the modelled bias from every sample::
 :func:`bias_compensator` builds ``jit(f)`` and ``jit(vmap(f))`` (a batch of sensors of the
 same model structure) once per basis and caches them, so a fleet of sensors or a stream of
 chunks never compiles again; on a CPU the single-sensor ``f`` is a compiled loop
-(:mod:`fogbayes.compensate_loops`) that reads each input once and writes in place. The basis centres and scales the covariates before any power
+(:mod:`fogbayes.thermal.compensate_loops`) that reads each input once and writes in place. The basis centres and scales the covariates before any power
 is taken, so the compensators also run in float32 (``dtype=np.float32``): temperatures of
 order 1e2 deg C and rates of order 1e4 deg/h keep ~1e-7 relative precision, far below gyro
 noise. The composite (paper 000) compensator lives in :mod:`fogbayes.composite.compensate`.
@@ -23,9 +23,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._lazy import jax_on_cpu, lazy_module
+from .._lazy import jax_on_cpu, lazy_module
 from .compensate_loops import compensate_into
-from .models.polynomial import PolyBasis
+from ..models.polynomial import PolyBasis
 
 jax = lazy_module("jax")  # the jitted compensator only: one-off calls take the NumPy path
 
@@ -33,7 +33,7 @@ jax = lazy_module("jax")  # the jitted compensator only: one-off calls take the 
 class Compensator(NamedTuple):
     """``single(coef (p,), z (n, c), y (n,))`` and ``batch(coef (s, p), z (s, n, c), y (s, n))``.
 
-    On a CPU ``single`` is the compiled loop of :mod:`fogbayes.compensate_loops` and also
+    On a CPU ``single`` is the compiled loop of :mod:`fogbayes.thermal.compensate_loops` and also
     takes ``out=`` (written in place); elsewhere it is the jitted XLA program."""
 
     single: Callable

@@ -3,7 +3,7 @@
 ``fit_recording`` (paper 004 when ``processing="paper"``):
 
 1. rate in deg/h; covariates per sample (T, dT/dt, extra channels, gradient);
-2. 1 s block means (:mod:`._thermal_data`); order chosen when ``orders`` gives a range or
+2. 1 s block means (:mod:`.data`); order chosen when ``orders`` gives a range or
    ``"auto"``: by paper 000's RMS criterion, or by PSIS-LOO / WAIC under the AR-noise
    posterior (``order_criterion``);
 3. closed-form least squares in the scaled basis (:func:`fogbayes.inference.lsq.lstsq`);
@@ -19,7 +19,7 @@ The fit document (JSON-able dict) holds everything ``compensate_recording`` need
 ``"2"`` (both 2), ``"2,1"`` (T order, dT/dt order), ranges ``"1-3,1-2"`` or ``"auto"``.
 
 Compensation subtracts the modelled bias sample by sample (jitted compensator of
-:mod:`fogbayes.compensate`), with covariates clamped to the range seen in the fit (outside
+:mod:`fogbayes.thermal.compensate`), with covariates clamped to the range seen in the fit (outside
 it a polynomial extrapolates wildly; PX4 clamps the same way), and flags 3-sigma outliers
 of the compensated output.
 """
@@ -37,11 +37,11 @@ from ..inference.compare import rms_criterion, select_order
 from ..inference.lsq import conditioning, identifiability, lstsq
 from ..metrics import DEFAULT_WINDOWS, segment_report
 from ..models.polynomial import design
-from ..models.thermal import OrderError, ThermalSpec, check_spec, thermal_basis
+from .model import OrderError, ThermalSpec, check_spec, thermal_basis
 from ..preprocess import pauta_flags, segment_thermal
 from ..preprocess.outliers import gross_error_flags
 from ..units import convert_rate
-from ._thermal_data import Processing, fit_blocks, make_processing, sample_covariates
+from .data import Processing, fit_blocks, make_processing, sample_covariates
 
 MODELS = ("bias-t", "thermal")
 DEFAULT_ORDERS = {"bias-t": "3", "thermal": "2"}
@@ -139,7 +139,7 @@ def _choose_order(specs, blocks, proc, criterion: str, seed: int, bayes_opts: di
     else:
         scores = []
         for spec in specs:
-            from ._thermal_bayes import posterior_document  # NumPyro: only when asked
+            from .bayes import posterior_document  # NumPyro: only when asked
 
             post = posterior_document(blocks, thermal_basis(spec, blocks.z), proc, seed=seed,
                                       **bayes_opts)
@@ -220,7 +220,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
                              fix="check the recording for absurd values and the model order")
     lo, hi = blocks.z.min(axis=0), blocks.z.max(axis=0)
     valid = {name: (float(a), float(b)) for name, a, b in zip(basis.names, lo, hi)}
-    from ..compensate import compensate_bias  # (imports JAX; NumPy below 5e6 samples)
+    from .compensate import compensate_bias  # (imports JAX; NumPy below 5e6 samples)
 
     after = compensate_bias(coef, clamp_covariates(z, basis, valid), rate, basis)  # as compensation does
     units = {"output": "deg/h", "T": "degC", "dT/dt": "degC/min"}
@@ -258,7 +258,7 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
     if selection:
         doc["order_selection"] = selection
     if bayes:
-        from ._thermal_bayes import posterior_document  # NumPyro: only when asked
+        from .bayes import posterior_document  # NumPyro: only when asked
 
         post = posterior_document(blocks, basis, proc, seed=seed, **bayes_opts)
         doc["bayes"] = post
@@ -287,7 +287,7 @@ def compensate_recording(rec, fit: dict) -> dict[str, np.ndarray]:
     if "valid_range" in p:
         z = clamp_covariates(z, basis, p["valid_range"])
     rate = rec.rate("deg/h")
-    from ..compensate import compensate_bias
+    from .compensate import compensate_bias
 
     comp = compensate_bias(np.asarray(p["coef"], dtype=float), z, rate, basis)
     gross = gross_error_flags(comp, limit=RATE_LIMIT_DEG_H)  # e.g. a 1e308 cell

@@ -25,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError, MissingColumnError
-from ..models.thermal import ThermalSpec, thermal_covariates
+from .model import ThermalSpec, thermal_covariates
 from ..preprocess import block_average, paper004_smoothing
 
 

@@ -16,7 +16,7 @@ from ..errors import FogbayesError
 from ..inference.bayes import fit_linear_bayes
 from ..inference.compare import loo, waic
 from ..models.polynomial import design, rebase_matrix
-from ._thermal_data import coarser_blocks
+from .data import coarser_blocks
 
 
 def posterior_document(blocks, basis, proc, *, seed: int, noise: str = "ar", ar_order: int = 1,

@@ -1,7 +1,7 @@
 """Compiled compensation loops for polynomial bias models (Numba, CPU), one per term set.
 
 For a basis with terms ``e_k`` the loop computes, per sample, what
-:func:`fogbayes.compensate.bias_compensator`'s XLA program computes, in the same order::
+:func:`fogbayes.thermal.compensate.bias_compensator`'s XLA program computes, in the same order::
 
     u_c = (z_c - centre_c) * (1 / scale_c)
     out = y - sum_k (coef_k * u_1 * ... * u_1 * u_2 * ...)      (e_kc factors u_c, in order)
@@ -20,7 +20,7 @@ import threading
 from collections.abc import Callable
 from functools import lru_cache
 
-from ._numba import numba
+from .._numba import numba
 import numpy as np
 
 
