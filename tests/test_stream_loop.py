@@ -124,7 +124,7 @@ def test_streamed_composite_calibration_equals_the_in_memory_one(record, tmp_pat
     got = _read(tmp_path / "out", ["rate", "outlier"])
     np.testing.assert_array_equal(got["outlier"], ref.columns["outlier"])
     ok = ~got["outlier"]
-    assert ok.mean() > 0.99
+    assert ok.mean() > 0.99 and res.outliers == int((~ok).sum()) and res.rms_10s is None
     np.testing.assert_allclose(got["rate"][ok], ref.columns["rate"][ok], rtol=0, atol=1e-7)
 
 
@@ -151,3 +151,49 @@ def test_cli_streams_a_loop_document(record, tmp_path):
     with np.load(tmp_path / "c.npz") as z:
         ref = apply_calibration(_doc("bias"), load(d / "rec.npz"))
         np.testing.assert_allclose(z["output"], ref.columns["output"], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("rows", [97, 1000, 1 << 20])
+def test_streamed_10s_rms_equals_block_rms_across_gaps_and_flags(tmp_path, rows):
+    """Reference: fogbayes.loop.metrics.block_rms (block_average, partial blocks kept,
+    blocks restarting after each gap) on the whole arrays."""
+    from fogbayes.loop.metrics import block_rms
+    from fogbayes.stream import open_source, scan_time
+    from fogbayes.stream.block_rms import StreamBlockRMS
+
+    rng = np.random.default_rng(5)
+    t = np.arange(6000) / 4.0
+    t = np.delete(t, np.r_[1000:1100, 3001:3003, 4500:4510]) + 1.7e9  # gaps, Unix time
+    t[2000:] += 0.013  # a stamp off the grid
+    y = 0.3 + rng.standard_normal(t.size)
+    flag = rng.random(t.size) < 0.05
+    flag[2200:2260] = True  # a whole 10 s block flagged: no mean
+    save(Recording(time=t, output=y), tmp_path / "r.npz")
+    src = open_source(tmp_path / "r.npz")
+    acc = StreamBlockRMS(scan_time(src, rows=rows), ("before", "after"))
+    for a in range(0, t.size, rows):
+        s = slice(a, a + rows)
+        acc.add(a, t[s], {"before": y[s], "after": y[s] - 0.3}, ~flag[s])
+    got = acc.rms()
+    assert got["before"] == pytest.approx(block_rms(t, y, flag), rel=1e-12)
+    assert got["after"] == pytest.approx(block_rms(t, y - 0.3, flag), rel=1e-12)
+    after = y - 0.3
+    ref = block_rms(t, after - after[~flag].mean(), flag)
+    assert got["after_about_mean"] == pytest.approx(ref, rel=1e-9)
+
+
+def test_cli_stream_summary_has_the_in_memory_before_after(record, tmp_path):
+    from fogbayes.cli.compensate import loop_summary
+
+    d, rec = record
+    doc = _doc("bias")
+    (tmp_path / "loop.json").write_text(json.dumps(doc))
+    assert cli.main(["-q", "compensate", str(d / "rec.npz"), "-p", str(tmp_path / "loop.json"),
+                     "-o", str(tmp_path / "c"), "--stream", "--chunk-rows", "3000",
+                     "--json", str(tmp_path / "s.json")]) == 0
+    got = json.loads((tmp_path / "s.json").read_text())["rms_10s_deg_h"]
+    loaded = load(d / "rec.npz")
+    ref = loop_summary(loaded, doc, apply_calibration(doc, loaded), rec_path="", params="",
+                       out="")["rms_10s_deg_h"]
+    for k in ("before", "after", "after_about_mean"):
+        assert got[k] == pytest.approx(ref[k], rel=1e-9), k

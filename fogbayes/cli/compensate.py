@@ -89,6 +89,8 @@ def stream_with_loop(doc: dict, source, *, rec_path, params, out, json_out, run_
         res = compensate_loop_stream(source, doc, out, rows=rows, run_events=run_events)
     say(f"wrote {res.path}: {res.n} rows, {res.outliers} flagged as outliers")
     tell_loop_notes(res.skipped, res.outside)
+    if res.rms_10s is not None:
+        say(f"10 s RMS {res.rms_10s['before']:.4g} -> {res.rms_10s['after']:.4g} deg/h")
     if json_out:
         write_json({"file": str(rec_path), "params": str(params), "out": str(res.path),
                     "model": doc.get("model"), "schema": doc.get("schema"), "rows": res.n,
@@ -97,7 +99,8 @@ def stream_with_loop(doc: dict, source, *, rec_path, params, out, json_out, run_
                                       for t in doc["calibration"]["terms"]
                                       if t["kind"] not in {s["kind"] for s in res.skipped}],
                     "run_events_left_out": res.skipped,
-                    "outside_calibrated_range": res.outside, "passes": res.passes},
+                    "outside_calibrated_range": res.outside, "passes": res.passes,
+                    **({} if res.rms_10s is None else {"rms_10s_deg_h": res.rms_10s})},
                    json_out)
 
 

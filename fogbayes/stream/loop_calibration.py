@@ -19,8 +19,8 @@ exactly:
   operating time of a rate-table run.
 
 Then one writing pass evaluates the terms chunk by chunk: the bias family subtracts the
-bias, the composite family solves for the input rate per sample
-(:func:`fogbayes.loop.compensate.solve_rate`). Results equal the in-memory path: the
+bias (and the 10 s RMS before/after accumulates, :mod:`.block_rms`), the composite family
+solves for the input rate per sample (:func:`fogbayes.loop.compensate.solve_rate`). Results equal the in-memory path: the
 flags, block grid and dT/dt bit for bit; the lag to rounding (its recursion restarts from
 the carried value). Passes over the input: the time scan, the two selections, the block
 pass and the writing pass.
@@ -41,6 +41,7 @@ from ..loop.calibration import (RATE_WINDOW_S, TARGET_BLOCKS, RangeCheck, applie
 from ..loop.calibration_doc import channel_order, validate_loop_document
 from ..loop.compensate import solve_rate
 from ..units import convert_rate
+from .block_rms import StreamBlockRMS
 from .scan import scan_time
 from .select import stream_median
 from .sources import DEFAULT_ROWS, RecordSource, open_source
@@ -57,6 +58,7 @@ class LoopStream(NamedTuple):
     skipped: list       # run-event terms not applied
     outside: list       # covariates outside the calibrated range
     passes: int         # passes over the input, scans included
+    rms_10s: dict | None  # bias family: 10 s RMS before / after / after about its mean
 
 
 def _rates(source: RecordSource, rows: int, fields, unit_of):
@@ -180,6 +182,7 @@ def compensate_loop_stream(source, doc: dict, out, *, rows: int = DEFAULT_ROWS,
     cols = {"time": np.float64} if include_time else {}
     cols.update({"rate" if composite else "output": dtype, "outlier": np.bool_})
     states = carry = prev = None
+    rms = None if composite else StreamBlockRMS(scan, ("before", "after"))
     n_out = 0
     with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
         for ch, rate, nxt in _rates(source, rows, fields, unit_of):
@@ -196,6 +199,7 @@ def compensate_loop_stream(source, doc: dict, out, *, rows: int = DEFAULT_ROWS,
                 part["rate"] = w
             else:
                 bias = np.column_stack(X) @ beta if terms else np.zeros(rate.size)
+                rms.add(ch.start, ch.time, {"before": rate, "after": rate - bias}, ~flag)
                 part["output"] = np.asarray(convert_rate(rate - bias, "deg/h", source.unit,
                                                          scale_factor=source.scale_factor),
                                             dtype=float)
@@ -206,4 +210,4 @@ def compensate_loop_stream(source, doc: dict, out, *, rows: int = DEFAULT_ROWS,
             sink.write(**part)
         path = sink.close()
     return LoopStream(path, source.n, tuple(cols), n_out, skipped, ranges.report(),
-                      scan.passes + spikes.passes + 2)
+                      scan.passes + spikes.passes + 2, None if rms is None else rms.rms())
