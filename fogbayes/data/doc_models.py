@@ -1,5 +1,8 @@
-"""Per-model checks of fit documents (bias-t/thermal, composite, allan, arma) and the
-whole-document scans; :func:`fogbayes.data.documents.validate_fit_document` calls them."""
+"""Checks of fit documents shared by every model (schema, whole-document scan, ``input``,
+polynomial basis) and the rules of the noise models (allan, arma); the bias-t/thermal and
+composite rules live in their families (``fogbayes.thermal.document``,
+``fogbayes.composite.document``). :func:`fogbayes.data.documents.validate_fit_document`
+calls them."""
 
 from __future__ import annotations
 
@@ -9,17 +12,13 @@ from typing import Any
 
 from ..errors import UnitError
 from .doc_rules import (
-    COEF_LIMIT,
-    COMPOSITE_LIMIT,
     COVARIATE_LIMIT,
     FIT_SCHEMA,
-    GAP_FACTOR_LIMIT,
     MAX_DEPTH,
     MAX_ORDER,
     SCALE_FACTOR_RANGE,
     SCHEMA_NAME,
     SCHEMA_VERSION,
-    WINDOW_LIMIT_S,
     _Checker,
     _is_num,
     _join,
@@ -102,91 +101,6 @@ def _optional_objects(doc: dict, v: _Checker, keys) -> None:
         v.get(doc, key, dict, required=False)
 
 
-# -- bias-t / thermal -------------------------------------------------------------------
-_PROCESSING = {"mode": ("default", "paper"), "rate_method": ("savgol", "difference", "paper"),
-               "outliers": ("pauta", "none")}
-_WINDOWS = ("average_s", "temperature_average_s", "rate_window_s")
-
-
-def _thermal(doc: dict, v: _Checker) -> None:
-    from ..thermal.model import ThermalSpec, covariate_names, thermal_terms
-    from ..thermal.data import Processing
-
-    _input(doc, v)
-    _optional_objects(doc, v, ("outliers", "fit", "metrics", "order_selection", "bayes",
-                               "diagnostics"))
-    v.get(doc, "vectorized", bool, required=False)
-    proc = v.get(doc, "processing", dict)
-    v.only(proc, "processing", Processing._fields)
-    for key, options in _PROCESSING.items():
-        v.choice(proc, key, f"processing.{key}", options, required=False)
-    for key in _WINDOWS:
-        v.number(proc, key, f"processing.{key}", required=False, positive=True,
-                 hi=WINDOW_LIMIT_S)
-    v.number(proc, "n_sigma", "processing.n_sigma", required=False, positive=True, hi=1e3)
-    v.number(proc, "rate_gap_factor", "processing.rate_gap_factor", required=False,
-             nullable=True, positive=True, hi=GAP_FACTOR_LIMIT)
-
-    p = v.get(doc, "params", dict)
-    spec = v.get(p, "spec", dict, path="params.spec")
-    v.only(spec, "params.spec", ThermalSpec._fields)
-    for key in ("t_order", "rate_order", "extra_order"):
-        v.number(spec, key, f"params.spec.{key}", required=False, integer=True, lo=0,
-                 hi=MAX_ORDER)
-    v.get(spec, "cross", bool, path="params.spec.cross", required=False)
-    v.get(spec, "temperature", str, path="params.spec.temperature", required=False)
-    for key in ("extra", "gradient"):
-        v.strings(spec, key, f"params.spec.{key}", required=False)
-    if len(spec.get("gradient") or ()) not in (0, 2):
-        v.fail("params.spec.gradient", f"has {len(spec['gradient'])} names; it needs two "
-                                       "(outer, inner) or none")
-    ts = ThermalSpec(**{k: tuple(x) if isinstance(x, list) else x for k, x in spec.items()})
-    names, terms = covariate_names(ts), [list(e) for e in thermal_terms(ts)]
-
-    b = v.get(p, "basis", dict, path="params.basis")
-    cov_names, exps, centre, scale = _basis(b, v, "params.basis")
-    if list(cov_names) != list(names):
-        v.fail("params.basis.covariates", f"{cov_names} do not match the model in "
-                                          f"'params.spec' (covariates {list(names)})")
-    if exps != terms:
-        v.fail("params.basis.exponents", f"{exps} do not match the model in 'params.spec' "
-                                         f"(exponents {terms})")
-    n = len(terms)
-
-    v.numbers(p, "coef", "params.coef", n=n, absmax=COEF_LIMIT)
-    cov = v.get(p, "covariance", list, path="params.covariance", required=False)
-    if cov is not None:
-        if len(cov) != n:
-            v.fail("params.covariance", f"{len(cov)} rows for {n} terms (a {n} x {n} matrix)")
-        for i in range(n):
-            v.numbers({"r": cov[i]}, "r", f"params.covariance[{i}]", n=n,
-                      absmax=COEF_LIMIT ** 2)
-    v.numbers(p, "stderr", "params.stderr", n=n, required=False, lo=0.0)
-    raw = v.get(p, "raw", dict, path="params.raw", required=False)
-    if raw is not None:
-        v.strings(raw, "terms", "params.raw.terms", n=n, required=False)
-        v.numbers(raw, "coef", "params.raw.coef", n=n)
-        v.numbers(raw, "stderr", "params.raw.stderr", n=n, required=False, lo=0.0)
-        v.get(raw, "form", str, path="params.raw.form", required=False)
-    units = v.get(p, "units", dict, path="params.units", required=False)
-    for key, u in (units or {}).items():
-        if not isinstance(u, str):
-            v.fail(f"params.units.{key}", f"is a {_kind(u)}, not a unit name")
-    valid = v.get(p, "valid_range", dict, path="params.valid_range", required=False)
-    if valid is not None:
-        v.only(valid, "params.valid_range", names)
-        for c, name in enumerate(names):
-            where = f"params.valid_range.{name}"
-            lo, hi = v.interval(valid, name, where, absmax=COVARIATE_LIMIT)
-            # the basis was scaled to this very range: centre +- scale (1 where constant)
-            slack = 1e-6 * scale[c] + 1e-9 * max(1.0, abs(centre[c]))
-            if lo < centre[c] - scale[c] - slack or hi > centre[c] + scale[c] + slack:
-                v.fail(where, f"[{lo!r}, {hi!r}] lies outside the range the basis was scaled to "
-                              f"(centre {centre[c]!r} +- scale {scale[c]!r})")
-    v.only(p, "params", ("spec", "basis", "coef", "covariance", "stderr", "raw", "units",
-                         "valid_range"))
-
-
 def _basis(b: dict, v: _Checker, key: str):
     """Structure of a polynomial basis (:func:`fogbayes.export.basis_to_dict`)."""
     cov_names = v.strings(b, "covariates", f"{key}.covariates")
@@ -220,84 +134,6 @@ def check_basis(d: Any, *, source: str | None = None, key: str = "params.basis")
         v.fail(key, f"is a {_kind(d)}, not an object")
     _scan(d, v, key)
     _basis(d, v, key)
-
-
-# -- composite --------------------------------------------------------------------------
-_SCALING = ("T_ref", "T_scale", "W_scale", "t_scale", "U_ref", "U_scale")
-
-
-def _composite(doc: dict, v: _Checker) -> None:
-    from ..composite.compensate import METHODS
-    from ..composite.cells import CONVENTIONS
-
-    _input(doc, v)
-    _optional_objects(doc, v, ("noise", "classification", "order_selection", "bayes",
-                               "compensation", "product"))
-    v.get(doc, "method", str, required=False)
-    v.choice(doc, "operating_time", "operating_time", CONVENTIONS, required=False)
-    v.number(doc, "T_nominal", "T_nominal", required=False, absmax=COVARIATE_LIMIT)
-    o = v.get(doc, "orders", dict)
-    s1, s2, u0, u1 = (v.number(o, k, f"orders.{k}", integer=True, lo=0, hi=6)
-                      for k in ("s1", "s2", "u0", "u1"))
-    n = (s1 + 1) * (s2 + 1) + u0 + 1 + u1 + 1
-    p = v.get(doc, "params", dict)
-    v.numbers(p, "scaled", "params.scaled", n=n, what=f"parameters of orders {s1},{s2},{u0},{u1}",
-              absmax=COMPOSITE_LIMIT)
-    v.strings(p, "labels", "params.labels", n=n, what="parameters", required=False)
-    sc = v.get(p, "scaling", dict, path="params.scaling")
-    v.only(sc, "params.scaling", _SCALING)
-    for key in _SCALING:  # the scales are half-ranges / maxima of the fit data: > 0
-        v.number(sc, key, f"params.scaling.{key}", absmax=COMPOSITE_LIMIT,
-                 positive=key.endswith("_scale"))
-    for part in ("raw", "raw_sd", "raw_lo90", "raw_hi90"):
-        raw = v.get(p, part, dict, path=f"params.{part}", required=False)
-        if raw is None:
-            continue
-        rows = v.get(raw, "M", list, path=f"params.{part}.M")
-        if len(rows) != s1 + 1:
-            v.fail(f"params.{part}.M", f"{len(rows)} rows for S1 order {s1} ({s1 + 1} rows)")
-        for i, row in enumerate(rows):
-            v.numbers({"M": row}, "M", f"params.{part}.M[{i}]", n=s2 + 1,
-                      what="columns (S2 order + 1)")
-        v.numbers(raw, "c", f"params.{part}.c", n=u0 + 1, what="coefficients (U0 order + 1)")
-        v.numbers(raw, "d", f"params.{part}.d", n=u1 + 1, what="coefficients (U1 order + 1)")
-    cal = v.get(doc, "calibrated", dict)
-    v.interval(cal, "temperature", "calibrated.temperature", absmax=COVARIATE_LIMIT)
-    v.interval(cal, "rate", "calibrated.rate", absmax=COMPOSITE_LIMIT)
-    _invertible(doc, v, (s1, s2, u0, u1))
-    comp = doc.get("compensation")
-    if comp is not None:
-        v.choice(comp, "method", "compensation.method", METHODS, required=False)
-        v.number(comp, "iterations", "compensation.iterations", required=False, integer=True,
-                 lo=0, hi=100)
-        v.interval(comp, "box_scaled", "compensation.box_scaled", required=False,
-                   absmax=COMPOSITE_LIMIT)
-        v.interval(comp, "rate_range", "compensation.rate_range", required=False,
-                   absmax=COMPOSITE_LIMIT)
-    bayes = doc.get("bayes")
-    if bayes is not None:
-        draws = v.get(bayes, "draws_scaled", list, path="bayes.draws_scaled", required=False)
-        for i, row in enumerate(draws or []):
-            v.numbers({"d": row}, "d", f"bayes.draws_scaled[{i}]", n=n, what="parameters",
-                      absmax=COMPOSITE_LIMIT)
-        v.numbers(bayes, "sigma_draws", "bayes.sigma_draws", required=False, lo=0.0)
-
-
-def _invertible(doc: dict, v: _Checker, orders) -> None:
-    """The compensator divides by the small-rate scale factor S_0(T): it must keep one sign
-    over the calibrated temperatures (as :func:`fogbayes.composite.compensate.reciprocal_poly`
-    requires when the compensator is built)."""
-    import numpy as np
-
-    from ..composite.compensate import MethodError, reciprocal_poly
-    from ..composite.model import Orders, Scaling, unpack
-
-    p = doc["params"]
-    try:
-        reciprocal_poly(unpack(np.asarray(p["scaled"], float), Orders(*orders)),
-                        tuple(doc["calibrated"]["temperature"]), Scaling(**p["scaling"]))
-    except MethodError as exc:
-        v.fail("params.scaled", f"these parameters cannot be inverted: {exc.problem}")
 
 
 # -- noise models (read by the report only) -----------------------------------------------

@@ -32,7 +32,9 @@ few lookups, and need no new dependency.
 
 The bounds (``COEF_LIMIT``, ``COVARIATE_LIMIT``, ... in :mod:`~fogbayes.data.doc_rules`)
 are far outside anything physical; they exist so that a document that passes cannot
-overflow float64 when applied. The per-model checks are in :mod:`~fogbayes.data.doc_models`.
+overflow float64 when applied. The checks every document shares and those of the noise
+models are in :mod:`~fogbayes.data.doc_models`; a model family with a package keeps its own
+rules beside its model (:data:`MODEL_CHECKS`), so this layer imports no family.
 """
 
 
@@ -43,15 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import UnitError
-from .doc_models import (
-    _allan,
-    _arma,
-    _check_schema,
-    _composite,
-    _scan,
-    _thermal,
-    check_basis,
-)
+from .doc_models import _allan, _arma, _check_schema, _scan, check_basis
 from .doc_rules import (
     COMPENSATING,
     FIT_SCHEMA,
@@ -62,6 +56,27 @@ from .doc_rules import (
     _kind,
     is_loop_document,
 )
+
+#: model -> its document rules: a function, or "module:function" of a family's package
+#: (imported when a document of that model is checked; the data layer names, never imports,
+#: the families above it)
+MODEL_CHECKS = {"bias-t": "fogbayes.thermal.document:check_document",
+                "thermal": "fogbayes.thermal.document:check_document",
+                "composite": "fogbayes.composite.document:check_document",
+                "allan": _allan, "arma": _arma}
+#: the validator of loop documents (the loop package's own rules)
+LOOP_CHECK = "fogbayes.loop.calibration_doc:validate_loop_document"
+
+
+def _resolve(check):
+    """A check function from :data:`MODEL_CHECKS` / :data:`LOOP_CHECK`."""
+    if callable(check):
+        return check
+    import importlib
+
+    module, _, name = check.partition(":")
+    return getattr(importlib.import_module(module), name)
+
 
 __all__ = ["COMPENSATING", "FIT_SCHEMA", "FitDocumentError", "agreed_unit", "check_basis",
            "check_channels", "declared_unit", "read_calibration", "read_fit_document",
@@ -109,9 +124,7 @@ def read_calibration(path: str | Path) -> dict:
 
     doc = _load(path)
     if is_loop_document(doc):  # the validator (and the loop package) only when needed
-        from ..loop.calibration_doc import validate_loop_document
-
-        return validate_loop_document(doc, str(path))
+        return _resolve(LOOP_CHECK)(doc, str(path))
     if is_axes_document(doc):  # one fit document per axis (fogbayes allan --axis all)
         return validate_axes_document(doc, str(path))
     validate_fit_document(doc, str(path))
@@ -151,8 +164,7 @@ def validate_fit_document(doc: Any, source: str | None = None) -> dict:
     for i, w in enumerate(warnings or []):
         if not isinstance(w, str):
             v.fail(f"warnings[{i}]", f"is a {_kind(w)}, not a string")
-    {"bias-t": _thermal, "thermal": _thermal, "composite": _composite, "allan": _allan,
-     "arma": _arma}[model](doc, v)
+    _resolve(MODEL_CHECKS[model])(doc, v)
     return doc
 
 
@@ -182,7 +194,7 @@ def declared_unit(path: str | Path) -> str | None:
                     if sep and key.strip() == "unit":
                         return value.strip() or None
             return None
-        from ..stream import formats
+        from . import column_streams as formats
 
         scanners = {".npz": formats._scan_npz, ".npy": formats._scan_npy,
                     ".parquet": formats._scan_parquet, ".pq": formats._scan_parquet}

@@ -45,7 +45,7 @@ from ..errors import (
 from ..data.temperature_columns import META_KEY as TEMPERATURES_KEY
 from ..data.temperature_columns import temperature_columns
 from ..units import normalise_unit
-from .formats import (
+from ..data.column_streams import (
     _NpyStream,
     _ParquetStream,
     _scan_npy,

@@ -1,4 +1,5 @@
-"""File formats read by :mod:`fogbayes.stream.sources`: sequential column streams.
+"""Sequential column streams of .npy, .npz and Parquet files (read by
+:mod:`fogbayes.stream.sources` and by the unit check of :mod:`.documents`).
 
 Each ``_scan_*`` reads only headers and returns ``(openers, lengths, metadata)``: per column
 a function that opens an independent stream positioned at the start of its .npy data (a
