@@ -45,7 +45,7 @@ def speed(series: int, n: int, sm_series: int | None) -> dict:
     import jax
     from statsmodels.tsa.arima.model import ARIMA
 
-    from fogbayes.inference.arma_fit import fit_arma_batch
+    from fogbayes.arma.fit import fit_arma_batch
 
     phi, theta = TRUTH[(2, 1)]
     X = simulate(phi, theta, n, range(series))
@@ -86,7 +86,7 @@ def speed(series: int, n: int, sm_series: int | None) -> dict:
 def select(n: int, seeds: int) -> dict:
     import jax
 
-    from fogbayes.inference.arma_select import PAPER_CANDIDATES, order_name, select_order
+    from fogbayes.arma.select import PAPER_CANDIDATES, order_name, select_order
 
     out = {}
     for order, (phi, theta) in TRUTH.items():

@@ -42,13 +42,13 @@ import numpy as np
 import fogbayes  # noqa: F401  (float64)
 from fogbayes import Recording
 from fogbayes.data import Metadata
-from fogbayes.inference import allan_bayes as ab
-from fogbayes.inference.allan_data import prepare
-from fogbayes.inference.allan_fit import fit_range
+from fogbayes.allan import bayes as ab
+from fogbayes.allan.data import prepare
+from fogbayes.allan.fit import fit_range
 from fogbayes.inference.datasheet import build_prior
-from fogbayes.models.allan import BI_FACTOR
+from fogbayes.allan.model import BI_FACTOR
 from fogbayes.simulate.noise import allan_noise
-from fogbayes.workflow.allan import fit_recording
+from fogbayes.allan.workflow import fit_recording
 
 FS = 10.0
 TRUTH = dict(Q=0.19, N=0.01, B=0.165, K=0.66)

@@ -8,7 +8,7 @@ The sweep's 0.5x warm-ups (config A: scenario noise N 0.005, B 0.02, K 0.02; 10 
 a 0.5 deg/h warm-up, tau 1.5 h; seeds 200-202) are missed 2 times in 3 without a prior,
 the base fit's random walk taking them up. Each record, and the clean record of the same
 seed, is run under two priors made from a simulated 12 h static run of the same noise
-(seed 5000 + seed) through ``fogbayes.workflow.allan.fit_recording`` -- what
+(seed 5000 + seed) through ``fogbayes.allan.workflow.fit_recording`` -- what
 ``fogbayes allan static.csv --json prior.json`` writes:
 
 * ``static 12 h``: the document as it is (K_max = the upper end of K's 90 % interval);
@@ -47,7 +47,7 @@ def prior_of(case: dict):
     from fogbayes._json import to_jsonable
     from fogbayes.diagnose.noise_prior import prior_from_doc
     from fogbayes.simulate.scenarios import simulate
-    from fogbayes.workflow.allan import fit_recording
+    from fogbayes.allan.workflow import fit_recording
 
     sim = simulate("static", seed=5000 + case["seed"], fs=10.0, duration=12 * 3600.0, noise=NOISE)
     doc = json.loads(json.dumps(to_jsonable(fit_recording(sim.recording, model="allan"))))

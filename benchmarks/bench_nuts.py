@@ -9,12 +9,12 @@ Models (one row each; data as in the tests, fixed seeds):
   composite  ``composite.bayes.fit_bayes``, cells noise, PAPER_ORDERS, on the
              paper000 scenario (seed 11, 20 s dwell, 5 s smoothing); NUTS samples the noise
              parameters (u_sigma, log_lam, rho), theta is drawn exactly given them.
-  allan      ``inference.allan_bayes.fit_bayes``, all five terms, on 2^14 samples at 10 Hz
+  allan      ``allan.bayes.fit_bayes``, all five terms, on 2^14 samples at 10 Hz
              of ``allan_noise`` (Q, N, B, K; seed 21); NUTS samples log Q .. log R (dense
              mass). ``discrepancy="auto"``: a refit with the discrepancy term, when the
              goodness-of-fit check asks for one, is inside the timed call ("+disc" after the
              model name).
-  arma       ``inference.arma_bayes.arma_posterior``, ARMA(1, 1) (phi 0.6, theta -0.4,
+  arma       ``arma.bayes.arma_posterior``, ARMA(1, 1) (phi 0.6, theta -0.4,
              n = 600, seed 0); NUTS samples pacf_phi, pacf_theta, sigma.
   thermal    ``workflow.thermal.fit_recording(model="thermal", bayes=True)`` on the 1 h, 1 Hz
              "thermal" scenario (seed 1): least squares + ``inference.bayes`` NUTS (AR(1)
@@ -140,9 +140,9 @@ def composite(sizes):
 
 
 def allan(sizes):
-    from fogbayes.inference.allan_bayes import fit_bayes
-    from fogbayes.inference.allan_data import prepare
-    from fogbayes.models.allan import TERMS
+    from fogbayes.allan.bayes import fit_bayes
+    from fogbayes.allan.data import prepare
+    from fogbayes.allan.model import TERMS
     from fogbayes.simulate.noise import allan_noise
 
     c, w, s = sizes(2, 400, 600)
@@ -169,7 +169,7 @@ def allan(sizes):
 def arma(sizes):
     from scipy.signal import lfilter
 
-    from fogbayes.inference.arma_bayes import arma_posterior
+    from fogbayes.arma.bayes import arma_posterior
 
     c, w, s = sizes(2, 500, 500)
     e = np.random.default_rng(0).standard_normal(600)

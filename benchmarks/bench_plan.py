@@ -42,9 +42,9 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
-from fogbayes.inference.allan_data import prepare
-from fogbayes.inference.allan_fit import fit_range
-from fogbayes.models.allan import TERMS, AllanParams
+from fogbayes.allan.data import prepare
+from fogbayes.allan.fit import fit_range
+from fogbayes.allan.model import TERMS, AllanParams
 from fogbayes.plan import PlanError, half_width, plan_from_pilot, plan_length, predicted_width
 from fogbayes.simulate.noise import (allan_noise, flicker_noise, quantization_noise,
                                      random_walk_noise, white_noise)

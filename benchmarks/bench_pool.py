@@ -39,8 +39,8 @@ TERMS = ("N", "B", "K")
 
 
 def fit_record(y, name):
-    from fogbayes.inference.allan_data import prepare
-    from fogbayes.inference.allan_fit import fit_range
+    from fogbayes.allan.data import prepare
+    from fogbayes.allan.fit import fit_range
 
     data, fit, left = fit_range(prepare(y, FS))
     return UnitFit(name, None, y.size, FS, np.asarray(fit.info["logp"]),

@@ -22,9 +22,9 @@ import time
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
-from fogbayes.inference.allan_data import prepare
-from fogbayes.inference.allan_fit import fit_wls
-from fogbayes.inference.allan_readout import slope_readouts
+from fogbayes.allan.data import prepare
+from fogbayes.allan.fit import fit_wls
+from fogbayes.allan.readout import slope_readouts
 from fogbayes.simulate.noise import allan_noise
 from fogbayes.stats.allan import allan_deviation
 
@@ -54,7 +54,7 @@ def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
                    "low": dev.dev_low.tolist(), "high": dev.dev_high.tolist()}
     for method in methods:
         t0 = time.perf_counter()
-        from fogbayes.inference import allan_bayes as ab
+        from fogbayes.allan import bayes as ab
 
         if method in ("wls", "wls4"):
             fit = fit_wls(data, PARAMS if method == "wls4" else ab.TERMS)

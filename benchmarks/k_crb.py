@@ -45,7 +45,7 @@ from scipy import linalg
 
 import fogbayes  # noqa: F401  (float64)
 from coverage_allan import LENGTHS, MIXES, PARAMS, simulate
-from fogbayes.inference.allan_readout import slope_readouts
+from fogbayes.allan.readout import slope_readouts
 from fogbayes.stats.allan import allan_deviation
 
 

@@ -1,7 +1,7 @@
 r"""Noise coefficients for filters: IEEE 952 terms in SI units, Kalibr/OpenVINS ``imu.yaml``.
 
 An Allan document (``fogbayes allan --json``) holds the five IEEE 952 terms in the gyro
-community's units (:data:`fogbayes.models.allan.UNITS`). Filters want SI, continuous-time
+community's units (:data:`fogbayes.allan.model.UNITS`). Filters want SI, continuous-time
 densities (the table is ``docs/units.md``):
 
 ==========  ===================  ==========================  ===============================
@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 
 from .errors import FogbayesError
-from .models.allan import BI_FACTOR, UNITS as DOC_UNITS  # the document's units, ADEV floor / B
+from .allan.model import BI_FACTOR, UNITS as DOC_UNITS  # the document's units, ADEV floor / B
 
 DEG = math.pi / 180.0
 #: document unit -> SI factor per term (see the table above)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.inference.allan_bayes import reported_terms, select_terms
-from fogbayes.inference.allan_data import prepare
+from fogbayes.allan.bayes import reported_terms, select_terms
+from fogbayes.allan.data import prepare
 from fogbayes.simulate.noise import allan_noise
 
 FS = 10.0

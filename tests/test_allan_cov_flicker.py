@@ -22,7 +22,7 @@ import math
 import numpy as np
 import pytest
 
-from fogbayes.models.allan import noise_scales
+from fogbayes.allan.model import noise_scales
 from fogbayes.simulate.noise import flicker_avar, flicker_noise
 from fogbayes.stats.allan_cov import covariance_tensors, mixture_moments
 

@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.inference.allan_data import prepare
-from fogbayes.inference.allan_fit import fit_wls
-from fogbayes.inference.allan_readout import slope_readouts
+from fogbayes.allan.data import prepare
+from fogbayes.allan.fit import fit_wls
+from fogbayes.allan.readout import slope_readouts
 from fogbayes.simulate.noise import allan_noise
 
 FS, N_SAMPLES, RECORDS = 10.0, 2**14, 60

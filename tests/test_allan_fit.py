@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from scipy import integrate, signal
 
-from fogbayes.inference.allan_data import (
+from fogbayes.allan.data import (
     cube_root_normal, model_moments, prepare, restrict,
 )
-from fogbayes.inference.allan_fit import fit_paper_lsq, fit_range, fit_wls
-from fogbayes.inference.allan_readout import slope_readouts
-from fogbayes.models.allan import AllanParams, adev, avar
+from fogbayes.allan.fit import fit_paper_lsq, fit_range, fit_wls
+from fogbayes.allan.readout import slope_readouts
+from fogbayes.allan.model import AllanParams, adev, avar
 from fogbayes.simulate.noise import allan_noise
 from fogbayes.stats.allan_cov import covariance_tensors
 
@@ -113,8 +113,8 @@ def test_model_moments_edf_matches_greenhall_for_white_noise(data):
 def test_interval_holds_the_estimate_on_a_record_the_model_does_not_describe():
     """A sine plus a little noise: the five-term model misfits (gof p ~ 0). Whatever the fit
     gives, each term's interval must contain its estimate (the upper cap once cut below it)."""
-    from fogbayes.inference.allan_data import prepare
-    from fogbayes.inference.allan_fit import fit_range
+    from fogbayes.allan.data import prepare
+    from fogbayes.allan.fit import fit_range
 
     t = np.arange(6000) / 100.0
     y = 0.01 * np.sin(2 * np.pi * 0.5 * t) + np.random.default_rng(0).normal(size=t.size) * 1e-4

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from fogbayes.models.allan import (
+from fogbayes.allan.model import (
     ARCSEC_IN_URAD, AllanParams, avar, coefficients_from_params, markov_avar, noise_scales,
     params_from_coefficients, params_from_variance_coefficients, sinusoid_avar, term_avar,
     variance_coefficients,

@@ -12,7 +12,7 @@ from fogbayes.data import Metadata, save
 from fogbayes.errors import FogbayesError
 from fogbayes.simulate.noise import allan_noise
 from fogbayes.stats.allan import allan_deviation
-from fogbayes.workflow.allan import AllanInputError, compensate_recording, fit_recording
+from fogbayes.allan.workflow import AllanInputError, compensate_recording, fit_recording
 
 FS = 10.0
 TRUTH = dict(Q=0.19, N=0.01, B=0.165, K=0.66)  # crossovers at 0.3, 30 and 300 s

@@ -6,10 +6,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.inference import arma_bayes
-from fogbayes.inference.arma_bayes import arma_posterior, compare_orders_bayes, pointwise_loglik
-from fogbayes.inference.arma_fit import fit_arma
-from fogbayes.models.arma import arma_loglik
+from fogbayes.arma import bayes as arma_bayes
+from fogbayes.arma.bayes import arma_posterior, compare_orders_bayes, pointwise_loglik
+from fogbayes.arma.fit import fit_arma
+from fogbayes.arma.model import arma_loglik
 
 sm_proc = pytest.importorskip("statsmodels.tsa.arima_process")
 

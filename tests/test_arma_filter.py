@@ -8,7 +8,7 @@ import pytest
 from scipy import linalg
 
 from fogbayes.errors import ArgumentError
-from fogbayes.models.arma_filter import (
+from fogbayes.arma.filter import (
     arma_spectrum,
     canonical_noise_var,
     denoise,

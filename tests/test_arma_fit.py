@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.inference.arma_fit import fit_arma, fit_arma_batch, long_ar_start
+from fogbayes.arma.fit import fit_arma, fit_arma_batch, long_ar_start
 
 sm_arima = pytest.importorskip("statsmodels.tsa.arima.model")
 sm_proc = pytest.importorskip("statsmodels.tsa.arima_process")

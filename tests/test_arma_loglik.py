@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import linalg, stats
 
-from fogbayes.models.arma import (
+from fogbayes.arma.model import (
     ar_to_pacf,
     arma_acov,
     arma_loglik,

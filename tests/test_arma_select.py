@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.inference.arma_select import (
+from fogbayes.arma.select import (
     PAPER_CANDIDATES,
     grid_candidates,
     order_name,
@@ -68,7 +68,7 @@ def test_criteria_equal_statsmodels():
 
 def test_masked_candidate_equals_its_own_fit():
     """A lower order fitted inside the padded shape is the same model as fitted alone."""
-    from fogbayes.inference.arma_fit import fit_arma
+    from fogbayes.arma.fit import fit_arma
 
     x = jnp.array(_series((1, 1), [5])[0])
     sel = select_order(x, PAPER_CANDIDATES)

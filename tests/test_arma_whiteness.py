@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.inference.arma_fit import fit_arma_batch
-from fogbayes.models.arma_filter import one_step_prediction
+from fogbayes.arma.fit import fit_arma_batch
+from fogbayes.arma.filter import one_step_prediction
 from fogbayes.stats.acf import acf, pacf
 from fogbayes.stats.whiteness import ljung_box, rho_a2, rho_ax3, whiteness
 

@@ -11,7 +11,7 @@ import pytest
 import fogbayes.cli.arma  # noqa: F401  (registers the command until cli/__init__ imports it)
 from fogbayes.cli import main
 from fogbayes.data import Recording
-from fogbayes.workflow.arma import analyse_recording, parse_candidates
+from fogbayes.arma.workflow import analyse_recording, parse_candidates
 
 sm_proc = pytest.importorskip("statsmodels.tsa.arima_process")
 sm_arima = pytest.importorskip("statsmodels.tsa.arima.model")

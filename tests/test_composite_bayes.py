@@ -2,7 +2,7 @@
 
 The collapsed likelihood (theta integrated out) is checked against a dense multivariate
 normal log-density for each noise model, the AR per-cell likelihood against
-fogbayes.models.arma.arma_loglik (an independent Kalman/closed-form implementation tested
+fogbayes.arma.model.arma_loglik (an independent Kalman/closed-form implementation tested
 against statsmodels in its own area), and the NUTS posterior against the GLS fit.
 """
 
@@ -15,7 +15,7 @@ from scipy.stats import multivariate_normal
 from fogbayes.composite.cells import rate_data
 from fogbayes.composite.bayes import _pointwise, cell_data, fit_bayes, marginal_loglik
 from fogbayes.composite.fit import fit_joint
-from fogbayes.models.arma import arma_loglik
+from fogbayes.arma.model import arma_loglik
 from fogbayes.composite.model import PAPER_000, PAPER_ORDERS, pack, raw_map, raw_offset
 from fogbayes.simulate.scenarios import simulate
 
@@ -66,7 +66,7 @@ def test_cells_marginal_matches_dense_gaussian():
 def test_ar_pointwise_matches_arma_loglik_per_cell():
     s, phi = 0.9, np.array([0.5, -0.2])
     d2 = cell_data(X, Y, CELL, T_ABS, K, 2)
-    from fogbayes.models.arma import ar_to_pacf
+    from fogbayes.arma.model import ar_to_pacf
     eta = {"sigma": jnp.asarray(s), "pacf": ar_to_pacf(jnp.asarray(phi))}
     theta = jnp.asarray(RNG.standard_normal(P))
     point = _pointwise("ar2", eta, theta, d2, K)

@@ -18,9 +18,9 @@ import fogbayes.cli.prior  # noqa: F401
 from fogbayes.data import Metadata, Recording, save
 from fogbayes.diagnose.noise_prior import prior_from_doc, read_noise_prior
 from fogbayes.errors import FogbayesError, UnitError
-from fogbayes.inference import allan_bayes as ab
-from fogbayes.inference.allan_data import prepare
-from fogbayes.inference.allan_fit import fit_range
+from fogbayes.allan import bayes as ab
+from fogbayes.allan.data import prepare
+from fogbayes.allan.fit import fit_range
 from fogbayes.inference.datasheet import (
     DatasheetPrior,
     TermPrior,
@@ -146,7 +146,7 @@ def test_prior_command_writes_a_document_that_reads_back(tmp_path):
 
 
 def test_allan_cli_records_the_prior_and_keeps_its_terms(tmp_path, short, monkeypatch):
-    import fogbayes.workflow.allan as wf
+    import fogbayes.allan.workflow as wf
 
     y, _ = short
     rec = Recording(time=np.arange(y.size) / FS, output=y, unit="deg/h",

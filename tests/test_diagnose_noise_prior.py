@@ -26,7 +26,7 @@ from fogbayes.loop import run_loop
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
 from fogbayes.simulate import simulate
-from fogbayes.workflow.allan import fit_recording
+from fogbayes.allan.workflow import fit_recording
 
 
 def test_walk_cap_is_the_walk_the_noise_model_fits():

@@ -13,9 +13,9 @@ from scipy import special
 import fogbayes
 import fogbayes.cli.plan  # noqa: F401  (registers the command)
 from fogbayes.cli import main
-from fogbayes.inference.allan_data import prepare, restrict
-from fogbayes.inference.allan_fit import fit_wls
-from fogbayes.models.allan import TERMS, AllanParams
+from fogbayes.allan.data import prepare, restrict
+from fogbayes.allan.fit import fit_wls
+from fogbayes.allan.model import TERMS, AllanParams
 from fogbayes.plan import (PlanError, expected_data, log_se, plan_from_pilot, plan_length,
                            predicted_se, predicted_width)
 from fogbayes.simulate.noise import allan_noise

@@ -243,7 +243,7 @@ def test_fast_allan_batch_equals_rows():
 
 @pytest.mark.parametrize("ext", ["parquet", "npz"])
 def test_stream_allan_equals_the_workflow_on_a_gappy_record(tmp_path, ext):
-    from fogbayes.workflow.allan import uniform_rate
+    from fogbayes.allan.workflow import uniform_rate
 
     n = 30011
     t = 1000.0 + 0.01 * np.arange(n)

@@ -1,6 +1,6 @@
 """``fogbayes allan REC --json OUT``: Allan deviation with intervals and the five-term fit.
 
-Thin layer over :func:`fogbayes.workflow.allan.fit_recording`: loads the recording, writes
+Thin layer over :func:`fogbayes.allan.workflow.fit_recording`: loads the recording, writes
 the JSON document (canonical units: N deg/sqrt(h), B deg/h, K deg/h^1.5, R deg/h^2,
 Q arcsec and urad, whatever the input unit) and, with ``--plot``, the log-log figure.
 ``--prior PRIOR.json`` (with ``--bayes``): a datasheet prior written by ``fogbayes prior``
@@ -89,7 +89,7 @@ def allan(
     """
     from ..errors import FogbayesError
     from ..data.atomic import atomic_path
-    from ..workflow.allan import fit_recording
+    from ..allan.workflow import fit_recording
 
     refuse_overwrite({"the recording": rec, "the --prior document": prior},
                      {"--json": json_out, "--plot": plot})

@@ -55,7 +55,7 @@ def arma(
     """
     from ..data.atomic import atomic_path
     from ..errors import ArgumentError, about_file
-    from ..workflow.arma import analyse_recording
+    from ..arma.workflow import analyse_recording
 
     refuse_overwrite({"the recording": rec_path}, {"--json": json_out, "--plot": plot})
     for flag, value, least in (("--decimate", decimate, 1), ("--detrend", detrend, 0),

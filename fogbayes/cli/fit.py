@@ -40,7 +40,7 @@ _OPTION_TYPES = {
     "rate_tolerance": "non-negative", "temperature_tolerance": "non-negative",
     "rate_threshold": "non-negative", "min_duration": "non-negative", "trim_s": "non-negative",
     "stable_s": "non-negative", "smooth_s": "non-negative",
-    # arma (fogbayes.workflow.arma.analyse_recording)
+    # arma (fogbayes.arma.workflow.analyse_recording)
     "decimate": "count", "detrend_order": "integer", "candidates": "text", "criterion": "text",
     "lags": "count", "nlags": "count",
 }

@@ -60,7 +60,7 @@ def plan(
       fogbayes -q plan pilot.csv --term B --precision 0.05 --json - > plan.json
     """
     from ..errors import FogbayesError, about_file
-    from ..models.allan import TERMS
+    from ..allan.model import TERMS
     from ..plan.length import PlanError, _validate
     from ..plan.pilot import plan_recording, summary_lines
 

@@ -101,7 +101,7 @@ def pool(
     With -m bias-t each unit's bias law b(T) = sum a_k (T - T_ref)^k is fitted by GLS under its noise model (as the closed loop fits it) and the coefficients are pooled: the typical unit's bias at T_ref, slope and curvature, how much units differ, a new unit's range, and outlier units.
     """
     from ..errors import ArgumentError, about_file
-    from ..models.allan import TERMS
+    from ..allan.model import TERMS
     from ..pool.allan import fit_unit, pool_allan, pool_document
     from ..pool.thermal import fit_unit as fit_thermal
     from ..pool.thermal import pool_thermal

@@ -68,7 +68,7 @@ def prior(
           --json loop.json --compensated comp.csv
     """
     from ..inference.datasheet import build_prior
-    from ..models.allan import UNITS
+    from ..allan.model import UNITS
 
     refuse_overwrite({}, {"--json": json_out})
     sheet = build_prior(arw=arw, arw_unit=arw_unit, bias_instability=bias_instability,

@@ -8,7 +8,7 @@ Noise models (``noise=``), eta their parameters:
 * ``"white"``: V = I;
 * ``"ar<p>"``: AR(p) within each cell, exact likelihood per cell (the first p values of
   a cell ~ N(0, s^2 Gamma_p), the rest conditionally given their p predecessors); phi
-  through the stationary map :func:`fogbayes.models.arma.pacf_to_ar`, PACF ~ U(-1, 1);
+  through the stationary map :func:`fogbayes.arma.model.pacf_to_ar`, PACF ~ U(-1, 1);
 * ``"cells"``: white + AR(1)-across-cells offsets (:mod:`.noise`), with
   log lam ~ N(-4, 3^2) (lam = offset variance / white variance; e^-4 ~ offsets of a few %
   of the white noise, the prior spans 1e-6 ... 1e2) and rho ~ U(0, 0.99). The tridiagonal
@@ -70,7 +70,7 @@ def _ar_whiten(phi, X, y, first, n):
     Rows t >= p: x_t - sum phi_i x_{t-i}; the first p rows of every cell (``first``,
     (K, p)) are replaced by L_p^-1 x, Gamma_p = L_p L_p^T (their stationary covariance).
     """
-    from ..models.arma import arma_acov
+    from ..arma.model import arma_acov
 
     p = phi.shape[0]
     g = arma_acov(phi, jnp.zeros(0), 1.0, p)
@@ -146,7 +146,7 @@ def _suff(noise, eta, data):
     X, y = data["X"], data["y"]
     if noise == "white":
         return X.T @ X, X.T @ y, y @ y, 0.0
-    from ..models.arma import pacf_to_ar
+    from ..arma.model import pacf_to_ar
 
     Xw, yw, logdet = _ar_whiten(pacf_to_ar(eta["pacf"]), X, y, data["first"], y.shape[0])
     return Xw.T @ Xw, Xw.T @ yw, yw @ yw, logdet
@@ -208,7 +208,7 @@ def _start(data: RateData, orders: Orders, sc: Scaling, noise: str, p_ar: int) -
         init["log_lam"] = float(np.clip(np.log(max(ls.lam, 1e-12)), -12.0, 6.0))
         init["rho"] = float(np.clip(ls.rho, 0.05, 0.95))
     elif p_ar:
-        from ..models.arma import ar_to_pacf
+        from ..arma.model import ar_to_pacf
 
         init["pacf"] = np.clip(np.asarray(ar_to_pacf(jnp.asarray(ls.ar))), -0.95, 0.95)
     return start, init
@@ -233,7 +233,7 @@ def _pointwise(noise, eta, theta, data, K):
     X, y = data["X"], data["y"]
     logdet_cell = 0.0
     if noise != "white":
-        from ..models.arma import pacf_to_ar
+        from ..arma.model import pacf_to_ar
 
         X, y, logdet = _ar_whiten(pacf_to_ar(eta["pacf"]), X, y, data["first"], y.shape[0])
         logdet_cell = logdet / K

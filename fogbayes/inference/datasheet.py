@@ -2,7 +2,7 @@ r"""Priors from a gyro datasheet: the ``fogbayes.prior/1`` document, its units a
 
 A datasheet states angle random walk (ARW), bias instability and sometimes rate random walk
 (RRW). ``fogbayes prior`` turns them into a prior document in the canonical units of
-:mod:`fogbayes.models.allan`; ``fogbayes allan --bayes --prior`` uses it as the prior of
+:mod:`fogbayes.allan.model`; ``fogbayes allan --bayes --prior`` uses it as the prior of
 the posterior, ``fogbayes loop --noise-prior`` as a cap on the random walk
 (:mod:`fogbayes.diagnose.noise_prior`).
 
@@ -49,7 +49,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError, UnitError
-from ..models.allan import BI_FACTOR, TERMS, UNITS
+from ..allan.model import BI_FACTOR, TERMS, UNITS
 
 SCHEMA_NAME = "fogbayes.prior"
 SCHEMA_VERSION = 1

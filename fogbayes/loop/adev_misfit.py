@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.optimize import nnls
 
-from ..models.allan import markov_avar, sinusoid_avar
+from ..allan.model import markov_avar, sinusoid_avar
 from ..stats.allan import allan_deviation
 
 

@@ -1,12 +1,12 @@
 r"""How long a static record must be to know one noise term to a given relative precision.
 
-The Allan noise fit (:func:`fogbayes.inference.allan_fit.fit_wls`) works on the overlapping
+The Allan noise fit (:func:`fogbayes.allan.fit.fit_wls`) works on the overlapping
 AVAR at octave cluster sizes. A record of ``n`` samples at ``fs`` Hz gives the cluster sizes
 :math:`m_k = 2^k` with :math:`\tau_k = m_k / f_s \ge \tau_{min}` (the shortest tau the fit
 keeps; 1/fs unless the pilot's fit left octaves out) and :math:`m_k \le \lfloor (n+1)/4
 \rfloor` (Stable32's stop ratio, :func:`fogbayes.stats.taus.cluster_sizes`), each averaging
 :math:`M_k = n + 1 - 2 m_k` terms. At log-parameters :math:`\theta = \log p` (p the terms
-of the model, canonical units of :mod:`fogbayes.models.allan`) the log estimates
+of the model, canonical units of :mod:`fogbayes.allan.model`) the log estimates
 :math:`y_k = \log\hat\sigma^2(\tau_k)` have, as in the fit,
 
 .. math::
@@ -15,7 +15,7 @@ of the model, canonical units of :mod:`fogbayes.models.allan`) the log estimates
     \mathrm{Cov}\,y = V = D^{1/2} C D^{1/2}, \quad D = \mathrm{diag}\,\psi'(\nu_k/2),
 
 with the EDF :math:`\nu` and correlation :math:`C` from the exact covariance of the estimates
-(:func:`fogbayes.inference.allan_data.model_moments`, :mod:`fogbayes.stats.allan_cov`). With
+(:func:`fogbayes.allan.data.model_moments`, :mod:`fogbayes.stats.allan_cov`). With
 
 .. math::
 
@@ -59,9 +59,9 @@ import numpy as np
 from scipy import special
 
 from ..errors import FogbayesError
-from ..inference.allan_data import MIN_TAUS, AllanFitData, log_moments, model_moments
-from ..inference.allan_fit import PENALTY_SD  # the fit's own weak penalty: same se
-from ..models.allan import TERMS, UNITS, AllanParams, avar, term_avar
+from ..allan.data import MIN_TAUS, AllanFitData, log_moments, model_moments
+from ..allan.fit import PENALTY_SD  # the fit's own weak penalty: same se
+from ..allan.model import TERMS, UNITS, AllanParams, avar, term_avar
 from ..stats.allan_cov import CovTensors, covariance_tensors
 from ..stats.allan_stencils import static_counts
 from ..stats.taus import cluster_sizes
@@ -253,7 +253,7 @@ def plan_length(params, fs: float, term: str, precision: float, *, level: float 
                 refuse: bool = True) -> LengthPlan | None:
     """Shortest gap-free record at ``fs`` Hz whose octave GLS fit gives ``term`` a relative
     half-width (high - low) / (2 value) <= ``precision`` at ``level``, for noise ``params``
-    (an :class:`~fogbayes.models.allan.AllanParams`, canonical units: e.g. datasheet values).
+    (an :class:`~fogbayes.allan.model.AllanParams`, canonical units: e.g. datasheet values).
 
     ``terms`` is the model fitted (default: the terms with a positive value); ``tau_min``
     the shortest tau the fit keeps (default 1/fs). A target that needs more than

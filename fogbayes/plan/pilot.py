@@ -1,7 +1,7 @@
 r"""Plan a static record's length from a short pilot recording.
 
-1. The pilot's octave AVAR (:func:`fogbayes.inference.allan_data.prepare`) is fitted by GLS
-   (:func:`fogbayes.inference.allan_fit.fit_range`: the shortest octaves are left out while
+1. The pilot's octave AVAR (:func:`fogbayes.allan.data.prepare`) is fitted by GLS
+   (:func:`fogbayes.allan.fit.fit_range`: the shortest octaves are left out while
    the fit fails its goodness of fit, as ``fogbayes allan`` does).
 2. The model is the terms the pilot resolves: starting from Q, N, B, K, R, while some term's
    90 % interval reaches 0 (profile likelihood: dropping it raises the GLS chi-square by less
@@ -39,9 +39,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import __version__
-from ..inference.allan_data import prepare
-from ..inference.allan_fit import AllanFit, fit_range, fit_wls
-from ..models.allan import TERMS, UNITS
+from ..allan.data import prepare
+from ..allan.fit import AllanFit, fit_range, fit_wls
+from ..allan.model import TERMS, UNITS
 from .length import MAX_DAYS, LengthPlan, PlanError, _validate, describe, half_width, \
     log_cov, plan_length
 from .spread import PlanRange, plan_range
@@ -206,7 +206,7 @@ def plan_recording(rec, term: str, precision: float, *, level: float = 0.9,
                    max_days: float = MAX_DAYS, terms=TERMS) -> dict:
     """Plan from a :class:`~fogbayes.data.Recording` (rate on a uniform grid, gaps = NaN);
     ``terms``: the candidate terms of the pilot's model (default all five)."""
-    from ..workflow.allan import uniform_rate
+    from ..allan.workflow import uniform_rate
 
     y, fs, _ = uniform_rate(rec)
     pp = plan_from_pilot(y, fs, term, precision, level=level, max_days=max_days, terms=terms)

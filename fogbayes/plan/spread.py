@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..models.allan import TERMS, AllanParams
+from ..allan.model import TERMS, AllanParams
 from .length import MAX_DAYS, _check_params, predicted_se, se_for_width, search_length, \
     shortest_record, z_value
 

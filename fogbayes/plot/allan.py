@@ -2,7 +2,7 @@
 
 Draws the measured ADEV with its confidence bars, the fitted total and each term's line,
 and the posterior band (and predictive band of the estimates) when the fit has them.
-Everything comes from the document of :func:`fogbayes.workflow.allan.fit_recording`.
+Everything comes from the document of :func:`fogbayes.allan.workflow.fit_recording`.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Figures of an ARMA drift analysis (paper 002, Figs. 3-5); every function returns a Figure.
 
-Renders what :func:`fogbayes.workflow.arma.analyse_recording` computed; computes nothing new.
+Renders what :func:`fogbayes.arma.workflow.analyse_recording` computed; computes nothing new.
 """
 
 from __future__ import annotations

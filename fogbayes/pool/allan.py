@@ -1,7 +1,7 @@
 r"""Pooled five-term Allan noise of several runs or units: population, spread, outliers.
 
 Each recording is one unit: its octave AVAR estimates are fitted by GLS in log space
-(:func:`fogbayes.inference.allan_fit.fit_range`, all five terms, the sensor-filtered
+(:func:`fogbayes.allan.fit.fit_range`, all five terms, the sensor-filtered
 shortest taus left out as ``fogbayes allan`` does), which gives :math:`y_u = \log\hat\theta_u`
 and its covariance :math:`\Sigma_u` (Gauss-Newton, widened by the dispersion when the
 goodness of fit fails). The pooled terms (default N, B, K; Q and R on request) are then
@@ -26,8 +26,8 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from ..inference.allan_fit import Z90
-from ..models.allan import TERMS, UNITS
+from ..allan.fit import Z90
+from ..allan.model import TERMS, UNITS
 
 SCHEMA = "fogbayes.pool/1"
 DEFAULT_TERMS = ("N", "B", "K")
@@ -52,14 +52,14 @@ class UnitFit(NamedTuple):
 
 def fit_unit(rec, *, name: str | None = None) -> UnitFit:
     """The GLS five-term fit of one recording (as ``fogbayes allan`` makes it)."""
-    from ..inference.allan_data import prepare
-    from ..inference.allan_fit import fit_range
-    from ..workflow.allan import uniform_rate
+    from ..allan.data import prepare
+    from ..allan.fit import fit_range
+    from ..allan.workflow import uniform_rate
 
     y, fs, _ = uniform_rate(rec)
     finite = y[np.isfinite(y)]
     if finite.size == 0 or np.ptp(finite) == 0:
-        from ..workflow.allan import AllanInputError
+        from ..allan.workflow import AllanInputError
 
         raise AllanInputError("the output is constant: its Allan variance is zero at every "
                               "tau and there is no noise to pool", file=rec.meta.source,

@@ -3,7 +3,7 @@ r"""Hierarchical normal model of per-unit estimates: population, spread, shrunk 
 Each unit :math:`u = 1..U` (a sensor, or one run of a sensor) gives an estimate
 :math:`y_u \in \mathbb R^P` of its own parameters :math:`\theta_u` with covariance
 :math:`\Sigma_u` (its single-unit fit; for Allan terms the GLS fit in log space,
-:func:`fogbayes.inference.allan_fit.fit_wls`). The population model is
+:func:`fogbayes.allan.fit.fit_wls`). The population model is
 
 .. math::
 
@@ -61,7 +61,7 @@ upper side, independent of its other components; its integral against
 unit as a normal measurement at its (low, arbitrary) estimate put the population K 8 % high
 with 73 % coverage on simulated fleets (benchmarks/RESULTS_pool.md; 80 % with this
 likelihood). The width sigma comes from the interval's upper end, which may be the fit's
-99.9 % cap (:func:`fogbayes.inference.allan_fit.upper_caps`): the limit is then a little
+99.9 % cap (:func:`fogbayes.allan.fit.upper_caps`): the limit is then a little
 tighter than a 95 % one.
 """
 
@@ -77,7 +77,7 @@ from scipy import stats
 
 MU_PRIOR_SD = 10.0
 SPREAD_PRIOR_SD = 1.0
-#: convergence rule shared with the single-record posteriors (inference/allan_bayes.py)
+#: convergence rule shared with the single-record posteriors (allan/bayes.py)
 R_HAT_MAX, ESS_MIN = 1.01, 200.0
 
 

@@ -37,7 +37,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from ..errors import FogbayesError
-from ..inference.allan_fit import Z90
+from ..allan.fit import Z90
 
 CI = 0.9
 FLAG_LEVEL = 0.01

@@ -4,7 +4,7 @@
 to a rate in ``unit``, places it on the uniform sample grid and feeds the accumulators of
 :mod:`fogbayes.stats.allan_accumulators`. The numbers are those of :func:`fogbayes.stats.allan.allan_deviation`
 (``kind="oadev"``) and of the Allan workflow (which also places the rate on its grid, see
-:func:`fogbayes.workflow.allan.uniform_rate`) to rounding, about 1e-12 relative.
+:func:`fogbayes.allan.workflow.uniform_rate`) to rounding, about 1e-12 relative.
 
 Memory bound: the accumulators keep the last ``2 max(m)`` samples' worth of block sums or
 phase, so memory is ``O(max_lag + chunk)`` and independent of the file's length

@@ -1,4 +1,5 @@
-"""Workflows: the order of the stages for each model family, one module per family.
+"""Workflows: the order of the stages for each model family, one module in each family's
+package.
 
 ``fit_recording(rec, *, model, orders=None, bayes=False, seed=0, **options) -> dict`` and
 ``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (docs/DESIGN.md / contracts):
@@ -6,8 +7,8 @@
 * :mod:`fogbayes.thermal.workflow` -- ``bias-t`` and ``thermal`` (paper 004; the family's
   package)
 * :mod:`fogbayes.composite.workflow` -- ``composite`` (paper 000; the family's package)
-* :mod:`.allan`     -- ``allan`` (five-term Allan model)
-* :mod:`.arma`      -- ``arma`` (paper 002 drift model; nothing to compensate)
+* :mod:`fogbayes.allan.workflow` -- ``allan`` (five-term Allan model)
+* :mod:`fogbayes.arma.workflow` -- ``arma`` (paper 002 drift model; nothing to compensate)
 
 :func:`workflow_for` imports the module of a model name lazily, so that the command line
 and notebooks pay only for the model they use.
@@ -22,7 +23,7 @@ from ..errors import FogbayesError
 
 #: model name -> workflow module (relative to this package)
 MODULES = {"bias-t": "..thermal.workflow", "thermal": "..thermal.workflow", "composite": "..composite.workflow",
-           "allan": ".allan", "arma": ".arma"}
+           "allan": "..allan.workflow", "arma": "..arma.workflow"}
 
 
 def workflow_for(model: str) -> ModuleType:

@@ -34,7 +34,7 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
-from .statespace import apply_T, arma_state_space, kalman_filter, stationary_cov
+from ..models.statespace import apply_T, arma_state_space, kalman_filter, stationary_cov
 
 Array = jax.Array
 

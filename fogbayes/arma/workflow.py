@@ -20,9 +20,9 @@ import numpy as np
 from ..data import Recording
 from ..data.documents import FIT_SCHEMA
 from ..errors import ArgumentError, TimeOrderError
-from ..inference.arma_select import PAPER_CANDIDATES, grid_candidates, order_name, select_order
-from ..models.arma import SIGN_CONVENTION
-from ..models.arma_filter import Denoised, OneStep, denoise, one_step_prediction
+from .select import PAPER_CANDIDATES, grid_candidates, order_name, select_order
+from .model import SIGN_CONVENTION
+from .filter import Denoised, OneStep, denoise, one_step_prediction
 from ..preprocess.detrend import detrend
 from ..stats.acf import Correlogram, acf, pacf
 from ..stats.whiteness import whiteness
@@ -151,7 +151,7 @@ def _bayes_section(x: np.ndarray, orders, seed: int) -> dict:
         raise ArgumentError(f"Bayesian WAIC/LOO keeps draws x n pointwise log-likelihoods; "
                             f"n = {x.size} exceeds {MAX_BAYES_SAMPLES}", column="bayes",
                             fix="decimate further (--decimate) or analyse a slice")
-    from ..inference.arma_bayes import compare_orders_bayes
+    from .bayes import compare_orders_bayes
 
     c = compare_orders_bayes(x, orders, seed=seed)
     return {"waic_loo": [

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ArgumentError
-from .statespace import arma_state_space, kalman_filter, rts_smoother
+from ..models.statespace import arma_state_space, kalman_filter, rts_smoother
 
 
 class OneStep(NamedTuple):

@@ -3,7 +3,7 @@ r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS
 * :func:`fit_paper_lsq` — paper 002's method: least squares of
   :math:`\hat\sigma^2(\tau) = \sum_n a_n \tau^n` (non-negative :math:`a_n = C_n^2`, relative
   weights so that every decade counts), converted with the paper's formulas
-  (:func:`fogbayes.models.allan.params_from_coefficients`). Intervals: sandwich covariance of
+  (:func:`fogbayes.allan.model.params_from_coefficients`). Intervals: sandwich covariance of
   :math:`a_n` with :math:`\mathrm{Var}\,\hat\sigma^2 = 2\hat\sigma^4/\nu` (estimates taken as
   independent, as the paper does), 90 % normal bounds on :math:`a_n` clipped at 0.
 * :func:`fit_wls` — generalised least squares in log-parameter space
@@ -19,8 +19,8 @@ r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS
   the term raises the GLS chi-square by less than 2.71 (profile likelihood, 90 %).
 
 Both return :class:`AllanFit` with values in the canonical units of
-:mod:`fogbayes.models.allan`. The IEEE-952 slope readouts are in
-:mod:`fogbayes.inference.allan_readout`.
+:mod:`fogbayes.allan.model`. The IEEE-952 slope readouts are in
+:mod:`fogbayes.allan.readout`.
 """
 
 from __future__ import annotations
@@ -32,11 +32,11 @@ import math
 import numpy as np
 from scipy import optimize, special
 
-from ..models.allan import (
+from .model import (
     _A_PER_P2, POWERS, TERMS, UNITS, AllanParams, params_from_coefficients,
 )
 from ..stats.edf import chi2_ppf
-from .allan_data import AllanFitData, log_moments, model_moments, restrict
+from .data import AllanFitData, log_moments, model_moments, restrict
 
 Z90 = float(special.ndtri(0.95))
 CHI2_90 = float(chi2_ppf(0.9, 1))

@@ -7,7 +7,7 @@ Model (paper sign convention, zero-mean series x)::
                                                  in PACF coordinates)
     phi = pacf_to_ar(r_phi), theta = pacf_to_ar(r_theta)
     sigma ~ HalfNormal(2 sd(x))                 weakly informative, on the data's scale
-    x ~ exact ARMA likelihood (fogbayes.models.arma.arma_loglik)
+    x ~ exact ARMA likelihood (fogbayes.arma.model.arma_loglik)
 
 Pointwise log-likelihood for WAIC/LOO: the exact likelihood factorises into one-step
 predictive densities, log p(x) = sum_t log N(x_t; x^_{t|t-1}, sigma2 F~_t) (Kalman
@@ -30,7 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..models.arma import arma_loglik, pacf_to_ar
+from .model import arma_loglik, pacf_to_ar
 from ..models.statespace import arma_state_space, kalman_filter
 
 
@@ -114,7 +114,7 @@ def _sampler(num_warmup: int, num_samples: int):
     """
     from numpyro.infer.util import initialize_model
 
-    from .nuts import chain_sampler, on_host
+    from ..inference.nuts import chain_sampler, on_host
 
     def run(keys, x, mask_phi, mask_theta, sigma_scale):
         TRACES["sampler"] += 1

@@ -7,7 +7,7 @@ grid p, q <= 3 and BIC:
 
 with log L the exact log-likelihood at the MLE (zero-mean series; k counts no mean, as
 statsmodels' ``trend="n"``). Every candidate is fitted inside the shapes of the largest
-(P, Q) with 0/1 masks on the coefficients (see :func:`fogbayes.inference.arma_fit.fit_arma`),
+(P, Q) with 0/1 masks on the coefficients (see :func:`fogbayes.arma.fit.fit_arma`),
 so the candidate set costs one compilation; many series of equal length are vmapped.
 
 AIC is efficient but not consistent: with a nested larger candidate it over-fits with
@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .arma_fit import ArmaFit, fit_arma
+from .fit import ArmaFit, fit_arma
 
 Array = jax.Array
 

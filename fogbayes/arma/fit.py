@@ -9,7 +9,7 @@ Rissanen 1982):
    x_t = sum phi_i x_{t-i} - sum theta_j a^_{t-j} + a_t (paper sign, hence theta = -coef).
 
 The exact maximum-likelihood fit starts there and maximises the sigma2-profiled exact
-log-likelihood (:func:`fogbayes.models.arma.arma_profile_loglik`) with optax L-BFGS over
+log-likelihood (:func:`fogbayes.arma.model.arma_profile_loglik`) with optax L-BFGS over
 u = atanh(PACF) (stationary and invertible by construction), stopping when the gradient of
 -log L_p / n is below ``tol``. Standard errors come from the Hessian of the profile
 log-likelihood in (phi, theta) and 2 sigma2^2 / n for sigma2.
@@ -29,7 +29,7 @@ import jax.numpy as jnp
 import optax
 from jax import lax
 
-from ..models.arma import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
+from .model import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
 
 Array = jax.Array
 

@@ -19,7 +19,7 @@ import numpy as np
 from .._xp import namespace, special
 
 from ..errors import TooShortError
-from ..models.allan import POWERS, TERMS, _A_PER_P2, avar, noise_scales
+from .model import POWERS, TERMS, _A_PER_P2, avar, noise_scales
 from ..stats.allan import allan_deviation
 from ..stats.allan_cov import CovTensors, covariance_tensors, mixture_moments
 

@@ -8,10 +8,10 @@
 2. the overlapping ADEV on the requested tau grid with the Greenhall EDF of the identified
    noise type and 90 % chi-square intervals (:func:`fogbayes.stats.allan.allan_deviation`);
 3. the noise fit on octave taus with their joint covariance: GLS in log space
-   (``bayes=False``, :func:`fogbayes.inference.allan_fit.fit_wls`) or the NumPyro posterior
-   with term selection by PSIS-LOO (``bayes=True``, :mod:`fogbayes.inference.allan_bayes`);
+   (``bayes=False``, :func:`fogbayes.allan.fit.fit_wls`) or the NumPyro posterior
+   with term selection by PSIS-LOO (``bayes=True``, :mod:`fogbayes.allan.bayes`);
    the shortest taus are left out while the GLS fit fails its goodness of fit (a sensor's
-   filters shape its first octaves: :func:`fogbayes.inference.allan_fit.fit_range`);
+   filters shape its first octaves: :func:`fogbayes.allan.fit.fit_range`);
 4. for comparison, paper 002's least-squares fit and the IEEE-952 slope readouts.
 
 Canonical units: Q arcsec (also given in urad), N deg/sqrt(h), B deg/h, K deg/h^1.5,
@@ -34,10 +34,10 @@ import numpy as np
 from .. import __version__
 from ..data.documents import FIT_SCHEMA
 from ..errors import FogbayesError
-from ..inference.allan_data import prepare
-from ..inference.allan_fit import AllanFit, fit_paper_lsq, fit_range
-from ..inference.allan_readout import slope_readouts
-from ..models.allan import ARCSEC_IN_URAD, TERMS, UNITS, adev, term_avar
+from .data import prepare
+from .fit import AllanFit, fit_paper_lsq, fit_range
+from .readout import slope_readouts
+from .model import ARCSEC_IN_URAD, TERMS, UNITS, adev, term_avar
 from ..stats.allan import allan_deviation
 
 MODELS = ("allan",)
@@ -109,7 +109,7 @@ def _wls_doc(fit: AllanFit, data) -> dict:
 
 
 def _bayes_doc(data, seed: int, select: bool, sampler: dict, prior=None) -> dict:
-    from ..inference import allan_bayes as ab
+    from . import bayes as ab
 
     if select:
         sel = ab.select_terms(data, seed=seed, prior=prior, **sampler)

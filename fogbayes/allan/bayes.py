@@ -54,9 +54,9 @@ import jax.numpy as jnp
 import numpy as np
 from scipy import stats
 
-from ..models.allan import TERMS, AllanParams, adev
-from .allan_data import AllanFitData, cube_root_normal, model_moments
-from .allan_fit import AllanFit, _estimates, _mask, fit_wls
+from .model import TERMS, AllanParams, adev
+from .data import AllanFitData, cube_root_normal, model_moments
+from .fit import AllanFit, _estimates, _mask, fit_wls
 
 PRIOR_SCALE = 3.0
 DELTA_SCALE = 0.05
@@ -146,7 +146,7 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
     shape: the data and the datasheet prior are arguments, so fitting another record of the
     same length, or with another sheet or none, reuses it.
     """
-    from .nuts import chain_sampler
+    from ..inference.nuts import chain_sampler
 
     def traced():
         TRACES["sampler"] += 1
@@ -181,7 +181,7 @@ def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 1
     1.01 and ESS > 200 (the K-R ridge mixes slowly); 1000 / 2000 gave 95-100 % for ~35 %
     more time (20 seeds each of two mixes, benchmarks/RESULTS_allan.md section 3).
     """
-    from .datasheet import as_prior
+    from ..inference.datasheet import as_prior
 
     prior = as_prior(prior)
     mask = _mask(terms)
@@ -296,7 +296,7 @@ def _loo(post: AllanPosterior):
 
 
 def _obvious(post: AllanPosterior) -> np.ndarray:
-    from ..models.allan import term_avar
+    from .model import term_avar
 
     low = np.quantile(post.draws, 0.05, axis=0)
     share = np.asarray(term_avar(tuple(low), post.data.tau)) / post.data.avar[None, :]
@@ -326,7 +326,7 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
     """
     import warnings
 
-    from .datasheet import as_prior
+    from ..inference.datasheet import as_prior
 
     prior = as_prior(prior)
     kw["prior"] = prior
@@ -361,8 +361,8 @@ def reported_terms(sel: TermSelection) -> dict:
     """What a selection reports per term: the selected model's median and 90 % interval for a
     present term; for an absent term value 0 and the interval [0, 95 % quantile of the full
     model] (an upper bound). Each :class:`~.allan_fit.TermEstimate` is paired with a flag."""
-    from ..models.allan import UNITS
-    from .allan_fit import TermEstimate
+    from .model import UNITS
+    from .fit import TermEstimate
 
     out = {}
     full_hi = np.quantile(sel.full.draws, 0.95, axis=0)

@@ -25,8 +25,8 @@ import math
 
 import numpy as np
 
-from ..models.allan import BI_FACTOR, SLOPES, TERMS, UNITS
-from .allan_fit import TermEstimate
+from .model import BI_FACTOR, SLOPES, TERMS, UNITS
+from .fit import TermEstimate
 
 _TOLERANCE = 0.25
 
