@@ -35,7 +35,7 @@ import fogbayes  # noqa: F401  (float64)
 from _timing import best_of  # benchmarks/ is on sys.path when a script runs
 from fogbayes.thermal.compensate import compensate_bias
 from fogbayes.inference.lsq import lstsq, lstsq_gram
-from fogbayes.metrics import bias_stability
+from fogbayes.stats.stability import bias_stability
 from fogbayes.simulate import simulate
 from fogbayes.simulate.noise import markov_noise
 from fogbayes.thermal.workflow import compensate_recording, fit_recording

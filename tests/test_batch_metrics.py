@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from fogbayes.batch.metrics import segment_reports
-from fogbayes.metrics import segment_report
+from fogbayes.stats.stability import segment_report
 
 
 def _close(a, b, where="doc"):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fogbayes.errors import TooShortError
-from fogbayes.metrics import bias, bias_stability, improvement_pct, segment_report, stability_report
+from fogbayes.stats.stability import bias, bias_stability, improvement_pct, segment_report, stability_report
 
 
 def test_equals_std_of_reshaped_window_means():

@@ -96,9 +96,9 @@ def test_block_length_follows_the_autocorrelation():
 
 
 def test_point_values_match_the_paper_definition():
-    """The point value is paper 004 eq. 13 (fogbayes.metrics.bias_stability), the interval
+    """The point value is paper 004 eq. 13 (fogbayes.stats.stability.bias_stability), the interval
     brackets it, and the same seed gives the same interval."""
-    from fogbayes.metrics import bias_stability
+    from fogbayes.stats.stability import bias_stability
 
     rng = np.random.default_rng(5)
     t = np.arange(0.0, 1800.0, 0.1)

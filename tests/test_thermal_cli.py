@@ -12,7 +12,7 @@ import fogbayes.cli.compensate
 import fogbayes.cli.fit  # noqa: F401
 from fogbayes.cli import main
 from fogbayes.data import save
-from fogbayes.metrics import bias_stability
+from fogbayes.stats.stability import bias_stability
 from fogbayes.simulate import simulate
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.metrics import bias_stability, improvement_pct
+from fogbayes.stats.stability import bias_stability, improvement_pct
 from fogbayes.simulate import simulate
 from fogbayes.thermal.workflow import compensate_recording, fit_recording
 

@@ -134,8 +134,8 @@ def _apply(rec, path, out_dir, doc: dict) -> dict:
     from ..data.documents import check_channels
     from ..data.io import write_csv_mixed
     from ..loop.metrics import block_rms
-    from ..metrics import stability_report
-    from ..units import convert_rate
+    from ..stats.stability import stability_report
+    from ..data.units import convert_rate
 
     before = rec.rate("deg/h")
     row: dict[str, Any] = {}

@@ -1,7 +1,7 @@
 """Bias and bias stability (paper 004 eqs. 12-13) of many sensors at once.
 
 :func:`segment_reports` returns, for every sensor, exactly the document of
-:func:`fogbayes.metrics.segment_report`::
+:func:`fogbayes.stats.stability.segment_report`::
 
     B0 = mean(F),   Bs(W) = std_{n-1}( means of F over the complete W-second blocks )
 
@@ -24,7 +24,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TooShortError
-from ..metrics import DEFAULT_WINDOWS, improvement_pct
+from ..stats.stability import DEFAULT_WINDOWS, improvement_pct
 from ..preprocess.blocks import block_index
 from . import kernels
 

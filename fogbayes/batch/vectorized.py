@@ -40,7 +40,7 @@ import jax
 import numpy as np
 
 from ..errors import FogbayesError, TooShortError
-from ..metrics import DEFAULT_WINDOWS
+from ..stats.stability import DEFAULT_WINDOWS
 from ..models.polynomial import PolyBasis, range_scaling
 from ..thermal.model import covariate_names, thermal_terms
 from ..thermal.data import (

@@ -31,7 +31,7 @@ def loop_summary(rec, doc: dict, applied, *, rec_path, params, out) -> dict:
     run events left out, covariates outside the calibrated range and, for the bias family,
     10 s RMS and bias stability before/after (:mod:`fogbayes.loop.metrics`)."""
     from ..loop.metrics import block_rms
-    from ..metrics import stability_report
+    from ..stats.stability import stability_report
 
     cols = applied.columns
     out_doc = {"file": str(rec_path), "params": str(params), "out": str(out),
@@ -118,9 +118,9 @@ def tell_loop_notes(skipped: list, outside: list) -> None:
 
 def summary(rec, fit_doc: dict, cols: dict, *, rec_path, params, out) -> dict:
     """The ``--json`` document: what was compensated and, for bias models, the bias
-    stability before/after (paper 004 eq. 13, :func:`fogbayes.metrics.stability_report`)."""
-    from ..metrics import stability_report
-    from ..units import convert_rate
+    stability before/after (paper 004 eq. 13, :func:`fogbayes.stats.stability.stability_report`)."""
+    from ..stats.stability import stability_report
+    from ..data.units import convert_rate
 
     doc = {"file": str(rec_path), "params": str(params), "out": str(out),
            "model": fit_doc.get("model"), "rows": int(len(cols["time"])),

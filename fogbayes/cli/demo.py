@@ -41,7 +41,7 @@ def demo(
       fogbayes demo --out demo_out --seed 3
       fogbayes -q demo --duration 7200 --fs 1 --json - > demo.json
     """
-    from ..demo import run_demo
+    from ..workflow.demo import run_demo
 
     refuse_overwrite({}, {"the report": out / "report.html",
                           "the recording": out / "demo_recording.csv", "--json": json_out})

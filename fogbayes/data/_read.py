@@ -446,7 +446,7 @@ def meta_text(table: Table, key: str, src: str) -> str | None:
 
 def meta_unit(table: Table, src: str) -> str:
     """The file's output unit (default deg/h), checked against the known units."""
-    from ..units import KNOWN_UNITS, normalise_unit
+    from .units import KNOWN_UNITS, normalise_unit
 
     v = meta_text(table, "unit", src)
     if v in (None, *_NONE):

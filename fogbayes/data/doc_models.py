@@ -77,12 +77,12 @@ def _input(doc: dict, v: _Checker) -> None:
         return
     unit = v.get(inp, "unit", str, path="input.unit", required=False, nullable=True)
     if unit is not None:
-        from ..units import normalise_unit
+        from .units import normalise_unit
 
         try:
             normalise_unit(unit)
         except UnitError:
-            from ..units import KNOWN_UNITS
+            from .units import KNOWN_UNITS
 
             v.fail("input.unit", f"unknown unit {unit[:40]!r}",
                    fix=f"use one of {', '.join(KNOWN_UNITS)}")

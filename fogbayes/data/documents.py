@@ -224,7 +224,7 @@ def agreed_unit(doc: dict, doc_source: str, rec_path: str | Path,
     doc_unit = (doc.get("input") or {}).get("unit")
     declared = declared_unit(rec_path)
     if declared is not None and doc_unit is not None:
-        from ..units import normalise_unit
+        from .units import normalise_unit
 
         if normalise_unit(declared, file=str(rec_path)) != normalise_unit(doc_unit):
             raise UnitError(

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import (EmptyRecordingError, NonFiniteError, ShapeError, TimeOrderError, TooShortError,
                       UnitError)
-from ..units import convert_rate, normalise_unit
+from .units import convert_rate, normalise_unit
 
 
 @dataclass(frozen=True)

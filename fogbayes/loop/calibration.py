@@ -40,7 +40,7 @@ import numpy as np
 from ..diagnose.context import spike_flags
 from ..diagnose.covariates import block_grid, covariates_of
 from ..diagnose.terms import KINDS, Term, design, labels
-from ..units import convert_rate
+from ..data.units import convert_rate
 from .compensate import solve_rate
 from .noise_model import components
 

@@ -26,7 +26,7 @@ from ..diagnose.fitting import ModelFit
 from ..diagnose.kinds import kind_of
 from ..diagnose.terms import columns, design
 from ..errors import FogbayesError
-from ..units import convert_rate
+from ..data.units import convert_rate
 
 
 def _model(terms, beta, cov: Covariates) -> np.ndarray:

@@ -4,7 +4,7 @@
                     (blocks restart at gaps; a short block at the end of a run is kept, so
                     bursts shorter than 10 s still count)
     bias_stability  paper 004 eq. 13 on 1 s windows of the compensated rate (deg/h),
-                    :func:`fogbayes.metrics.bias_stability`
+                    :func:`fogbayes.stats.stability.bias_stability`
     elpd            PSIS-LOO elpd of the block means (:mod:`fogbayes.diagnose.elpd`)
 """
 
@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import TooShortError
-from ..metrics import bias_stability
+from ..stats.stability import bias_stability
 from ..preprocess.blocks import block_average
 
 RMS_WINDOW_S = 10.0

@@ -212,10 +212,10 @@ def stability_intervals(before: np.ndarray, afters: dict[str, np.ndarray], time:
 
     Rates in deg/h on the same ``time``; ``keep`` (bool) leaves samples out of all of them
     (e.g. flagged outliers, as :func:`fogbayes.loop.metrics.stability` does). The point
-    values equal :func:`fogbayes.metrics.bias_stability`. Every pair uses one block length
+    values equal :func:`fogbayes.stats.stability.bias_stability`. Every pair uses one block length
     (the largest of all the series) and the same seed, hence the same resampled blocks.
     """
-    from ..metrics import window_means
+    from ..stats.stability import window_means
 
     time, before = np.asarray(time, float), np.asarray(before, float)
     afters = {k: np.asarray(v, float) for k, v in afters.items()}
@@ -238,7 +238,7 @@ def single_stability(rate: np.ndarray, time: np.ndarray, *, window_s: float = 1.
                      keep: np.ndarray | None = None, level: float = LEVEL,
                      n_boot: int = N_BOOT, seed: int = SEED) -> StdInterval:
     """Bias stability (deg/h) of one rate on ``window_s`` means, with its interval."""
-    from ..metrics import window_means
+    from ..stats.stability import window_means
 
     time, rate = np.asarray(time, float), np.asarray(rate, float)
     if keep is not None:

@@ -18,7 +18,7 @@ from typing import Any, Callable, NamedTuple
 import numpy as np
 
 from ..data.recording import Metadata, Recording
-from ..units import RATE_UNITS_IN_DEG_H, RAW_UNITS, normalise_unit
+from ..data.units import RATE_UNITS_IN_DEG_H, RAW_UNITS, normalise_unit
 from . import effects as fx
 from . import profiles as pf
 from ._checks import SimulationParameterError, positive, seed_int

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import FogbayesError, TooShortError
 from ..stats.taus import cluster_sizes
-from ..units import convert_rate
+from ..data.units import convert_rate
 from ..stats.allan_accumulators import variance
 from ..stats.allan_blocked import accumulator
 from .scan import scan_time

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import FogbayesError, UnitError
 from ..preprocess._checks import GAP_FACTOR
-from ..units import convert_rate
+from ..data.units import convert_rate
 from .covariates import covariate_chunks, make_plan
 from .pauta import stream_pauta
 from .scan import scan_time

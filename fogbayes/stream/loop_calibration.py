@@ -40,7 +40,7 @@ from ..diagnose.terms import chunk_columns
 from ..loop.calibration import (RATE_WINDOW_S, TARGET_BLOCKS, RangeCheck, applied_terms)
 from ..loop.calibration_doc import channel_order, validate_loop_document
 from ..loop.compensate import solve_rate
-from ..units import convert_rate
+from ..data.units import convert_rate
 from .block_rms import StreamBlockRMS
 from .scan import scan_time
 from .select import stream_median

@@ -44,7 +44,7 @@ from ..errors import (
 )
 from ..data.temperature_columns import META_KEY as TEMPERATURES_KEY
 from ..data.temperature_columns import temperature_columns
-from ..units import normalise_unit
+from ..data.units import normalise_unit
 from ..data.column_streams import (
     _NpyStream,
     _ParquetStream,

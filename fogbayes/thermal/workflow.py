@@ -35,12 +35,12 @@ from ..errors import FogbayesError, NonFiniteError, TooShortError
 from ..export import basis_from_dict, coefficient_document
 from ..inference.compare import rms_criterion, select_order
 from ..inference.lsq import conditioning, identifiability, lstsq
-from ..metrics import DEFAULT_WINDOWS, segment_report
+from ..stats.stability import DEFAULT_WINDOWS, segment_report
 from ..models.polynomial import design
 from .model import OrderError, ThermalSpec, check_spec, thermal_basis
 from ..preprocess import pauta_flags, segment_thermal
 from ..preprocess.outliers import gross_error_flags
-from ..units import convert_rate
+from ..data.units import convert_rate
 from .data import Processing, fit_blocks, make_processing, sample_covariates
 
 MODELS = ("bias-t", "thermal")

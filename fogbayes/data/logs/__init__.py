@@ -22,7 +22,7 @@ import operator
 from pathlib import Path
 
 from ...errors import ArgumentError, FileFormatError, UnitError
-from ...units import normalise_unit
+from ..units import normalise_unit
 from .._read import Table
 from ._common import AXES, LOGS, LogSelectionError, NoGyroError, pick_axis
 

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from .errors import UnitError
+from ..errors import UnitError
 
 #: One unit of each rate unit, expressed in deg/h.
 RATE_UNITS_IN_DEG_H = {

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Callable, NamedTuple
 
 
-from .data import save
+from ..data import save
 
 
 class DemoResult(NamedTuple):
@@ -32,9 +32,9 @@ class DemoResult(NamedTuple):
 def run_demo(out_dir: str | Path = "fogbayes_demo", *, seed: int = 0, duration: float | None = None,
              fs: float | None = None, step: Callable[[str], None] = lambda s: None) -> DemoResult:
     """Run the demonstration and write ``report.html`` and the recording into ``out_dir``."""
-    from .simulate import simulate
-    from .stats.allan import allan_deviation
-    from .thermal.workflow import compensate_recording, fit_recording
+    from ..simulate import simulate
+    from ..stats.allan import allan_deviation
+    from ..thermal.workflow import compensate_recording, fit_recording
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -78,12 +78,12 @@ def _summary(rec, fits, stability, report) -> str:
 
 
 def _write_report(path, rec, sim, fits, comp, adev, oracle):
-    from .plot.demo import plot_adev_compare, plot_compensation
-    from .report import sections as S
-    from .report.bootstrap import stability_intervals
-    from .report.headline import headline_section, improvement_verdict, model_line
-    from .report.html import Section, fmt, fmt_pct, write
-    from .workflow.report import covariates
+    from ..plot.demo import plot_adev_compare, plot_compensation
+    from ..report import sections as S
+    from ..report.bootstrap import stability_intervals
+    from ..report.headline import headline_section, improvement_verdict, model_line
+    from ..report.html import Section, fmt, fmt_pct, write
+    from .report import covariates
 
     import dataclasses
 

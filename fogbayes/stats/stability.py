@@ -26,8 +26,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .errors import TooShortError
-from .preprocess.blocks import block_average
+from ..errors import TooShortError
+from ..preprocess.blocks import block_average
 
 DEFAULT_WINDOWS = (1.0, 10.0, 100.0)
 
