@@ -16,7 +16,7 @@ import yaml
 
 from fogbayes.cli import main
 from fogbayes.data import Recording, save
-from fogbayes.export import DEG_H_TO_RAD_S, ExportError, ardupilot_gyro_parameters
+from fogbayes.export.coefficients import DEG_H_TO_RAD_S, ExportError, ardupilot_gyro_parameters
 from fogbayes.models.polynomial import evaluate
 from fogbayes.thermal.model import ThermalSpec, bias_t_spec, thermal_basis
 

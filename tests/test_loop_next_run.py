@@ -148,7 +148,7 @@ def test_run_events_are_left_out_unless_asked(runs, tmp_path):
 
 
 def test_px4_export_takes_the_polynomial_and_names_what_it_cannot(runs):
-    from fogbayes.export import ExportError, basis_from_loop, px4_gyro_parameters
+    from fogbayes.export.coefficients import ExportError, basis_from_loop, px4_gyro_parameters
 
     d, _, _ = runs
     doc = json.loads((d / "loop.json").read_text())

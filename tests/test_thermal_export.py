@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from fogbayes.thermal.compensate import bias_compensator, compensate_bias, compensate_chunks
-from fogbayes.export import (
+from fogbayes.export.coefficients import (
     DEG_H_TO_RAD_S,
     ExportError,
     basis_from_dict,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.documents import FIT_SCHEMA
-from ..export import coefficient_document
+from ..export.coefficients import coefficient_document
 from ..inference.lsq import conditioning_from_covariance, identifiability
 from ..models.polynomial import rebase_matrices
 

@@ -1,11 +1,11 @@
 """``fogbayes export DOC... --format F --out FILE``: numbers for filters and firmware.
 
 * ``kalibr``: Kalibr/OpenVINS ``imu.yaml`` gyroscope keys from Allan documents
-  (:func:`fogbayes.export_noise.kalibr_yaml`);
+  (:func:`fogbayes.export.noise.kalibr_yaml`);
 * ``ieee952``: the five IEEE 952 terms with intervals, in document units and SI
-  (:func:`fogbayes.export_noise.ieee952_document`);
+  (:func:`fogbayes.export.noise.ieee952_document`);
 * ``px4`` / ``ardupilot``: ``TC_G*`` / ``INS_TCAL*`` parameter files from ``bias-t`` fit
-  documents or loop calibrations, one per axis in x, y, z order (:mod:`fogbayes.export`).
+  documents or loop calibrations, one per axis in x, y, z order (:mod:`fogbayes.export.coefficients`).
 
 The unit table is ``docs/units.md``.
 """
@@ -27,7 +27,7 @@ def _ordered(paths: list[Path]) -> list[tuple[dict, str]]:
     multi-axis document by their names (x, y, z from the start, none missing or repeated)."""
     from ..data.axes_doc import per_axis
     from ..data.documents import read_calibration
-    from ..export import ExportError
+    from ..export.coefficients import ExportError
 
     named = [(name, doc, where) for p in paths
              for name, doc, where in per_axis(read_calibration(p), str(p))]
@@ -48,7 +48,7 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None, list[str
     temperature span the fits saw (None when no document states one); the documents'
     warnings about the logged rates (fogbayes/data/logs/firmware.py)."""
     from ..errors import FogbayesError
-    from ..export import ExportError, basis_from_dict, basis_from_loop
+    from ..export.coefficients import ExportError, basis_from_dict, basis_from_loop
 
     from ..data.logs.firmware import PREFIX as FIRMWARE_PREFIX
 
@@ -129,7 +129,7 @@ def export(
                                 "drop --index (px4 and ardupilot only)")
     refuse_overwrite({"a document": docs}, {"--out": out})
     if fmt in ("kalibr", "ieee952"):
-        from ..export_noise import ieee952_document, kalibr_yaml
+        from ..export.noise import ieee952_document, kalibr_yaml
 
         from ..data.axes_doc import per_axis
 
@@ -147,7 +147,7 @@ def export(
             text = kalibr_yaml([(sub, where) for _, sub, where in named], quantile=quantile,
                                topic=topic)
     else:
-        from .. import export as ex
+        from ..export import coefficients as ex
 
         axes, span, notes = _axes(docs)
         if len(axes) > 3:

@@ -3,7 +3,7 @@
 Every fit document written (``fogbayes fit``, ``batch``, the workflows'
 ``fit_recording``) starts with ``"schema": "fogbayes.fit/1"``. Every reader
 (``compensate --params``, ``report --fit``, batch and stream compensation, the PX4 export's
-:func:`fogbayes.export.basis_from_dict`) goes through :func:`read_fit_document` /
+:func:`fogbayes.export.coefficients.basis_from_dict`) goes through :func:`read_fit_document` /
 :func:`validate_fit_document`, which refuse, with a :class:`FitDocumentError` naming the
 document and the key path (``fit.json: key 'params.raw.coef': 2 values for 5 terms. Fix:
 ...``):

@@ -105,7 +105,7 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
 
 def _thermal(source, fit, out, rows, flags, include_time, dtype):
     from ..thermal.compensate import bias_compensator
-    from ..export import basis_from_dict
+    from ..export.coefficients import basis_from_dict
     from ..thermal.model import ThermalSpec
     from ..thermal.data import Processing
     from ..thermal.workflow import check_fit_document, clamp_covariates

@@ -32,8 +32,8 @@ from __future__ import annotations
 
 import math
 
-from .errors import FogbayesError
-from .allan.model import BI_FACTOR, UNITS as DOC_UNITS  # the document's units, ADEV floor / B
+from ..errors import FogbayesError
+from ..allan.model import BI_FACTOR, UNITS as DOC_UNITS  # the document's units, ADEV floor / B
 
 DEG = math.pi / 180.0
 #: document unit -> SI factor per term (see the table above)

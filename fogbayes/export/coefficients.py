@@ -34,8 +34,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .errors import FogbayesError
-from .models.polynomial import PolyBasis, rebase_matrix, to_raw
+from ..errors import FogbayesError
+from ..models.polynomial import PolyBasis, rebase_matrix, to_raw
 
 DEG_H_TO_RAD_S = math.pi / 180.0 / 3600.0
 
@@ -52,7 +52,7 @@ def basis_to_dict(basis: PolyBasis) -> dict:
 
 def basis_from_dict(d: dict, *, source: str | None = None) -> PolyBasis:
     """Inverse of :func:`basis_to_dict` (raises a FogbayesError on a malformed document)."""
-    from .data.documents import check_basis
+    from ..data.documents import check_basis
 
     check_basis(d, source=source)  # shapes, finite centres, positive scales, exponents 0..8
     try:
@@ -178,7 +178,7 @@ def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis,
     calibration run (a step, a linear drift, a periodic term) are not part of the sensor
     and are left out.
     """
-    from .diagnose.kinds import kind_of  # the loop's term kinds (the package imports JAX)
+    from ..diagnose.kinds import kind_of  # the loop's term kinds (the package imports JAX)
 
     cal = doc["calibration"]
     powers, coef, where, i = [], [], None, 0
