@@ -35,6 +35,9 @@ def test_flat_names_are_the_workflow_functions():
         fogbayes.compensate(rec, {"model": "allan"})
     with pytest.raises(AttributeError):
         fogbayes.no_such_name  # noqa: B018
+    static = simulate("static", seed=1, duration=600.0, fs=10.0).recording
+    with pytest.raises(fogbayes.FogbayesError, match="candidates"):  # never silently ignored
+        fogbayes.fit(static, model="arma", orders="1,1")
 
 
 def test_every_public_name_resolves_and_no_subpackage_is_shadowed():

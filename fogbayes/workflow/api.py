@@ -23,12 +23,18 @@ import numpy as np
 def fit(rec, *, model: str, orders=None, bayes: bool = False, seed: int = 0,
         **options) -> dict[str, Any]:
     """Fit ``model`` to a :class:`~fogbayes.data.Recording`: the document ``fogbayes fit``
-    writes (``bias-t``, ``thermal``, ``composite``, ``allan``; ``arma`` runs its analysis)."""
+    writes (``bias-t``, ``thermal``, ``composite``, ``allan``; for ``arma`` the analysis of
+    :func:`fogbayes.arma.workflow.analyse_recording`, whose ``document`` is that file)."""
     from . import workflow_for
 
     wf = workflow_for(model)
-    if model == "arma":
-        return wf.analyse_recording(rec, **options)
+    if model == "arma":  # orders are chosen among the candidates (options["candidates"])
+        if orders is not None:
+            from ..errors import ArgumentError
+
+            raise ArgumentError("the arma analysis chooses its orders among candidates",
+                                column="orders", fix="pass candidates=... instead of orders")
+        return wf.analyse_recording(rec, bayes=bayes, seed=seed, **options)
     return wf.fit_recording(rec, model=model, orders=orders, bayes=bayes, seed=seed, **options)
 
 
