@@ -32,6 +32,7 @@ import numpy as np
 
 from .model import arma_loglik, pacf_to_ar
 from ..models.statespace import arma_state_space, kalman_filter
+from ..inference.convergence import converged, ess_floor
 
 
 class ArmaPosterior(NamedTuple):
@@ -156,7 +157,7 @@ def _run(x, p, q, P, Q, seed: int, num_warmup: int, num_samples: int,
     summ = summ.loc[[i for i in summ.index if i == "sigma2" or i in free]]
     rhat, ess = float(summ["r_hat"].max()), float(summ["ess_bulk"].min())
     ndiv = int(div.sum())
-    ok = bool(rhat < 1.01 and ess > 100 * C and ndiv == 0)
+    ok = converged(rhat, ess, ndiv, floor=ess_floor(C))
     return ArmaPosterior(idata, post["phi"].mean((0, 1))[:p], post["theta"].mean((0, 1))[:q],
                          float(post["sigma2"].mean()), rhat, ess, ndiv, ok)
 

@@ -41,6 +41,7 @@ from .cells import RateData
 from .model import Orders, Scaling, raw_map, raw_offset, unpack
 from .fit import _xy, default_scaling, parse_noise
 from .noise import cell_stats
+from ..inference.convergence import converged, ess_floor
 
 
 class BayesFit(NamedTuple):
@@ -355,7 +356,7 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
     # the strict R-hat < 1.01 test for any value in [1.005, 1.01)
     summ = az.summary(idata, var_names=list(post), kind="diagnostics", round_to="none")
     rhat, ess = float(np.nanmax(summ["r_hat"])), float(np.nanmin(summ["ess_bulk"]))
-    ok = bool(rhat < 1.01 and ess >= 100 * chains and div == 0)
+    ok = converged(rhat, ess, div, floor=ess_floor(chains))
     return BayesFit(theta, post["sigma"] * sc.U_scale, orders, sc, noise, idata, rhat, ess,
                     div, ok)
 

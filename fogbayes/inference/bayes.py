@@ -34,6 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 import numpyro.distributions as dist
 from .nuts import chain_sampler, on_host
+from .convergence import converged, ess_floor
 
 from ..errors import FogbayesError
 from ..arma.model import arma_loglik, pacf_to_ar
@@ -157,7 +158,7 @@ def convergence_of(idata, var_names, num_chains: int) -> list[Convergence]:
     ess_t = per_sensor(az.ess(idata, var_names=var_names, method="tail"), np.min)
     div = int(np.asarray(idata.sample_stats["diverging"]).sum())
     return [Convergence(float(r), float(eb), float(et), div,
-                        bool(np.isfinite(r) and r < 1.01 and eb >= 100 * num_chains and div == 0))
+                        converged(r, eb, div, floor=ess_floor(num_chains)))
             for r, eb, et in zip(rhat, ess_b, ess_t)]
 
 

@@ -67,6 +67,7 @@ tighter than a 95 % one.
 
 from __future__ import annotations
 
+from ..inference.convergence import converged
 import functools
 from typing import NamedTuple
 
@@ -167,7 +168,7 @@ def _summary(zs, div) -> dict:
     ess = min(float(np.min(diag[k]["n_eff"])) for k in ("mu", "log_s"))
     divergences = int(np.asarray(div).sum())
     return {"r_hat_max": r_hat, "ess_min": ess, "divergences": divergences,
-            "converged": bool(r_hat < R_HAT_MAX and ess > ESS_MIN and divergences == 0)}
+            "converged": converged(r_hat, ess, divergences, floor=ESS_MIN)}
 
 
 def shrink(y, cov, mu, spread, rng, cens=None) -> np.ndarray:
