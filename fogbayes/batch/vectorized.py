@@ -43,12 +43,7 @@ from ..errors import FogbayesError, TooShortError
 from ..stats.stability import DEFAULT_WINDOWS
 from ..models.polynomial import PolyBasis, range_scaling
 from ..thermal.model import covariate_names, thermal_terms
-from ..thermal.data import (
-    Processing,
-    fit_blocks,
-    make_processing,
-    sample_covariates,
-)
+from ..thermal.data import fit_blocks, processing_of_options, sample_covariates
 from ..thermal.workflow import (
     MODELS,
     model_spec,
@@ -210,14 +205,8 @@ def _fit_documents(recs, model, orders, bayes, solver, on_error, options) -> lis
                             fix="use 'numba' (CPU), 'gram' or 'qr' (jit(vmap), any device)")
     groups = prepare.clock_groups(recs)  # a rig's sensors share one clock: work per group
     _check(model, recs, groups, orders, bayes, options)
-    known = set(Processing._fields[1:]) | {"processing", "windows", "cross", "extra", "gradient",
-                                           "extra_order", "temperature"}
-    bad = sorted(set(options) - known)
-    if bad:
-        raise FogbayesError(f"unknown option(s) {bad} for model {model}", column="options",
-                            fix=f"use {', '.join(sorted(known))}")
-    proc = make_processing(options.get("processing", "default"),
-                           **{k: options[k] for k in Processing._fields[1:] if k in options})
+    proc = processing_of_options(model, options, {"windows", "cross", "extra", "gradient",
+                                                  "extra_order", "temperature"})
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     t_order, r_order = parse_orders(model, orders)[0]
     spec = model_spec(model, t_order, r_order, options)

@@ -42,6 +42,18 @@ class Processing(NamedTuple):
     rate_gap_factor: float | None = None  # None: gaps as preprocess defines them
 
 
+def processing_of_options(model: str, options: dict, other_keys) -> Processing:
+    """The :class:`Processing` of a fit's ``**options`` (``processing`` mode plus the
+    overrides), refusing any key that is neither a processing field nor in ``other_keys``."""
+    known = set(Processing._fields[1:]) | {"processing"} | set(other_keys)
+    bad = sorted(set(options) - known)
+    if bad:
+        raise FogbayesError(f"unknown option(s) {bad} for model {model}", column="options",
+                            fix=f"use {', '.join(sorted(known))}")
+    return make_processing(options.get("processing", "default"),
+                           **{k: options[k] for k in Processing._fields[1:] if k in options})
+
+
 def make_processing(mode: str = "default", **overrides) -> Processing:
     """The defaults of ``mode`` ("default" or "paper") with explicit overrides."""
     if mode == "paper":

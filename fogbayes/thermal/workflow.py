@@ -41,7 +41,7 @@ from .model import OrderError, ThermalSpec, check_spec, thermal_basis
 from ..preprocess import pauta_flags, segment_thermal
 from ..preprocess.outliers import gross_error_flags
 from ..data.units import convert_rate
-from .data import Processing, fit_blocks, make_processing, sample_covariates
+from .data import Processing, fit_blocks, processing_of_options, sample_covariates
 
 MODELS = ("bias-t", "thermal")
 DEFAULT_ORDERS = {"bias-t": "3", "thermal": "2"}
@@ -174,13 +174,8 @@ def fit_recording(rec, *, model: str, orders: str | None = None, bayes: bool = F
     if model not in MODELS:
         raise FogbayesError(f"unknown thermal model '{model}'", column="model",
                             fix=f"use one of {', '.join(MODELS)}")
-    known = set(Processing._fields[1:]) | set(_OTHER_KEYS) | set(_SPEC_KEYS) | set(_BAYES_KEYS)
-    bad = sorted(set(options) - known)
-    if bad:
-        raise FogbayesError(f"unknown option(s) {bad} for model {model}", column="options",
-                            fix=f"use {', '.join(sorted(known))}")
-    proc = make_processing(options.get("processing", "default"),
-                           **{k: options[k] for k in Processing._fields[1:] if k in options})
+    proc = processing_of_options(model, options,
+                                 set(_OTHER_KEYS) | set(_SPEC_KEYS) | set(_BAYES_KEYS))
     windows = tuple(options.get("windows", DEFAULT_WINDOWS))
     rate = rec.rate("deg/h")
     # gross errors (non-finite after the unit conversion, |rate| > 1e9 deg/h, > 1e3 robust
