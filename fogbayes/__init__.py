@@ -13,15 +13,13 @@ __version__ = "0.1.0"
 __all__ = ["FogbayesError", "Metadata", "Recording", "allan_deviation", "compensate", "fit",
            "load", "run_loop", "save", "__version__"]
 
-#: the flat API resolved on first use (fogbayes.workflow.api): importing fogbayes stays light
-_LAZY = {"fit", "compensate", "run_loop", "allan_deviation"}
-
-
 def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
+    """The flat API (fogbayes.workflow.api.LAZY), resolved on first use: importing fogbayes
+    stays light."""
+    from .workflow.api import LAZY
 
-        from .workflow.api import LAZY
+    if name in LAZY:
+        import importlib
 
         module, attr = LAZY[name]
         value = getattr(importlib.import_module(module), attr)
