@@ -100,7 +100,8 @@ def stream_with_loop(doc: dict, source, *, rec_path, params, out, json_out, run_
                                       if t["kind"] not in {s["kind"] for s in res.skipped}],
                     "run_events_left_out": res.skipped,
                     "outside_calibrated_range": res.outside, "passes": res.passes,
-                    **({} if res.rms_10s is None else {"rms_10s_deg_h": res.rms_10s})},
+                    **({} if res.rms_10s is None else {"rms_10s_deg_h": res.rms_10s,
+                                                       "metrics": res.metrics})},
                    json_out)
 
 
@@ -260,12 +261,16 @@ def compensate(
         src = stream_source(unit)
         with progress(f"compensating {rec} in chunks of {chunk_rows} rows ({fit_doc['model']})"), \
                 about_file(rec):
-            res = compensate_stream(src, fit_doc, out, rows=chunk_rows)
+            res = compensate_stream(src, fit_doc, out, rows=chunk_rows,
+                                    metrics=json_out is not None)
         say(f"wrote {res.path}: {res.n} rows, {res.outliers} flagged as outliers")
         if json_out:
             write_json({"file": str(rec), "params": str(params), "out": str(res.path),
                         "model": fit_doc.get("model"), "rows": res.n, "outliers": res.outliers,
-                        "columns": list(res.columns), "passes": res.passes}, json_out)
+                        "columns": list(res.columns), "passes": res.passes,
+                        **({} if res.metrics is None else {"unit": src.unit,
+                                                           "metrics": res.metrics})},
+                       json_out)
         return
     recording = load_recording(rec, column=column, time_column=time_column,
                                output_unit=unit,

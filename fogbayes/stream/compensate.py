@@ -36,6 +36,7 @@ from ..data.units import convert_rate
 from .covariates import covariate_chunks, make_plan
 from .pauta import stream_pauta
 from .scan import scan_time
+from .stability import StreamStability
 from .sources import DEFAULT_ROWS, RecordSource, open_source
 from .writers import check_sink, open_sink
 
@@ -50,6 +51,7 @@ class StreamCompensation(NamedTuple):
     threshold: float     # last 3-sigma threshold, deg/h (NaN for composite)
     iterations: int      # Pauta iterations (0 for composite)
     passes: int          # passes over the input, scan included
+    metrics: dict | None = None  # metrics=True, bias-t/thermal: bias stability before/after
 
 
 #: Rows per compensator call: 2 MB per float64 column stays in cache and amortises the
@@ -79,7 +81,8 @@ def _pieces(f, rows: int, *arrays):
 
 
 def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags: bool = True,
-                      include_time: bool = True, dtype=np.float64) -> StreamCompensation:
+                      include_time: bool = True, metrics: bool = False,
+                      dtype=np.float64) -> StreamCompensation:
     """Compensate ``source`` (a :class:`RecordSource` or path) with ``fit`` into ``out``.
 
     Args:
@@ -89,6 +92,8 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
         flags: compute the 3-sigma outlier column (bias-t/thermal; extra passes).
         include_time: copy the time column into the output. Without it a bias-t record's
             time column is neither read nor validated (nothing else needs it).
+        metrics: bias-t/thermal: also the bias and bias stability before/after
+            (:mod:`.stability`, the in-memory ``stability_report``; reads the time column).
         dtype: dtype of the compensated column (float64 = the in-memory result).
     """
     check_sink(out)  # an output it could not write or replace: refused before any pass
@@ -96,14 +101,14 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
         source = open_source(source)
     model = fit.get("model") if isinstance(fit, dict) else None
     if model in ("bias-t", "thermal"):
-        return _thermal(source, fit, out, rows, flags, include_time, dtype)
+        return _thermal(source, fit, out, rows, flags, include_time, metrics, dtype)
     if model == "composite":
         return _composite(source, fit, out, rows, include_time, dtype)
     raise FogbayesError(f"cannot compensate with model {model!r}", column="model",
                         fix="pass a bias-t, thermal or composite fit document")
 
 
-def _thermal(source, fit, out, rows, flags, include_time, dtype):
+def _thermal(source, fit, out, rows, flags, include_time, metrics, dtype):
     from ..thermal.compensate import bias_compensator
     from ..export.coefficients import basis_from_dict
     from ..thermal.model import ThermalSpec
@@ -116,11 +121,16 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
     proc = Processing(**fit["processing"])
     basis = basis_from_dict(p["basis"])
     source.require("output")
-    if include_time:
+    if include_time or metrics:
         source.require("time")
     scan = None
     if spec.rate_order > 0:
         scan = scan_time(source, rows=rows, gap_factor=proc.rate_gap_factor or GAP_FACTOR)
+    # the report's blocks are cut at gaps by the default rule, whatever the fit's rate rule
+    metric_scan = None
+    if metrics:
+        metric_scan = scan if scan is not None and scan.gap_factor == GAP_FACTOR \
+            else scan_time(source, rows=rows)
     plan = make_plan(source, scan, spec, rate_method=proc.rate_method,
                      rate_window_s=proc.rate_window_s)
     coef = np.asarray(p["coef"], dtype=float)
@@ -128,7 +138,8 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
     f = bias_compensator(basis).single
     if jax.default_backend() == "cpu":  # many chunks: the compiled loop, never the one-off
         f = partial(f, method="loop")   # NumPy path of compensate_loops
-    fields = ("time", "output", "temperatures") if include_time or scan else ("output", "temperatures")
+    fields = ("time", "output", "temperatures") if include_time or scan or metrics \
+        else ("output", "temperatures")
 
     def compensated():
         for ch, z in covariate_chunks(source, plan, scan, rows, fields=fields):
@@ -139,6 +150,9 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
             yield ch, _pieces(lambda zz, yy: f(coef, zz, yy), rows, z, rate)
 
     passes = 0 if scan is None else scan.passes
+    if metric_scan is not None and metric_scan is not scan:
+        passes += metric_scan.passes
+    stability = None if metric_scan is None else StreamStability(metric_scan)
     pauta = None
     if flags:
         pauta = stream_pauta(lambda: (c for _, c in compensated()), n_sigma=float(proc.n_sigma))
@@ -150,6 +164,10 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
         for ch, comp in compensated():
             mask = pauta.flags(comp) if pauta is not None else np.zeros(comp.size, bool)
             n_out += int(mask.sum())
+            if stability is not None:
+                before = convert_rate(ch.output, source.unit, "deg/h",
+                                      scale_factor=source.scale_factor)
+                stability.add(ch.start, ch.time, before, comp)
             y = convert_rate(comp, "deg/h", source.unit, scale_factor=source.scale_factor)
             part = {"output": np.asarray(y, dtype=float), "outlier": mask}
             if include_time:
@@ -158,7 +176,8 @@ def _thermal(source, fit, out, rows, flags, include_time, dtype):
         path = sink.close()
     return StreamCompensation(path, source.n, tuple(cols), n_out,
                               float(pauta.threshold) if pauta else float("nan"),
-                              int(pauta.iterations) if pauta else 0, passes + 1)
+                              int(pauta.iterations) if pauta else 0, passes + 1,
+                              None if stability is None else stability.report())
 
 
 def _composite(source, fit, out, rows, include_time, dtype):

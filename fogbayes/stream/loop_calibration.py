@@ -19,7 +19,8 @@ exactly:
   operating time of a rate-table run.
 
 Then one writing pass evaluates the terms chunk by chunk: the bias family subtracts the
-bias (and the 10 s RMS before/after accumulates, :mod:`.block_rms`), the composite family
+bias (and the 10 s RMS before/after accumulates, :mod:`.block_rms`, with the bias
+stability before/after, :mod:`.stability`), the composite family
 solves for the input rate per sample (:func:`fogbayes.loop.compensate.solve_rate`). Results equal the in-memory path: the
 flags, block grid and dT/dt bit for bit; the lag to rounding (its recursion restarts from
 the carried value). Passes over the input: the time scan, the two selections, the block
@@ -43,6 +44,7 @@ from ..loop.compensate import solve_rate
 from ..data.units import convert_rate
 from .block_rms import StreamBlockRMS
 from .scan import scan_time
+from .stability import StreamStability
 from .select import stream_median
 from .sources import DEFAULT_ROWS, RecordSource, open_source
 from .writers import check_sink, open_sink
@@ -59,6 +61,7 @@ class LoopStream(NamedTuple):
     outside: list       # covariates outside the calibrated range
     passes: int         # passes over the input, scans included
     rms_10s: dict | None  # bias family: 10 s RMS before / after / after about its mean
+    metrics: dict | None  # bias family: bias and bias stability before/after (paper 004)
 
 
 def _rates(source: RecordSource, rows: int, fields, unit_of):
@@ -183,6 +186,7 @@ def compensate_loop_stream(source, doc: dict, out, *, rows: int = DEFAULT_ROWS,
     cols.update({"rate" if composite else "output": dtype, "outlier": np.bool_})
     states = carry = prev = None
     rms = None if composite else StreamBlockRMS(scan, ("before", "after"))
+    stability = None if composite else StreamStability(scan)
     n_out = 0
     with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
         for ch, rate, nxt in _rates(source, rows, fields, unit_of):
@@ -200,6 +204,7 @@ def compensate_loop_stream(source, doc: dict, out, *, rows: int = DEFAULT_ROWS,
             else:
                 bias = np.column_stack(X) @ beta if terms else np.zeros(rate.size)
                 rms.add(ch.start, ch.time, {"before": rate, "after": rate - bias}, ~flag)
+                stability.add(ch.start, ch.time, rate, rate - bias)
                 part["output"] = np.asarray(convert_rate(rate - bias, "deg/h", source.unit,
                                                          scale_factor=source.scale_factor),
                                             dtype=float)
@@ -210,4 +215,5 @@ def compensate_loop_stream(source, doc: dict, out, *, rows: int = DEFAULT_ROWS,
             sink.write(**part)
         path = sink.close()
     return LoopStream(path, source.n, tuple(cols), n_out, skipped, ranges.report(),
-                      scan.passes + spikes.passes + 2, None if rms is None else rms.rms())
+                      scan.passes + spikes.passes + 2, None if rms is None else rms.rms(),
+                      None if stability is None else stability.report())
