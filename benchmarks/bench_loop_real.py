@@ -123,14 +123,14 @@ def _err(t, model_det, true_det, flag) -> float:
 def oracle(ctx, base, effect_col):
     """True-form GLS fit: base terms + the planted effect's true shape (free amplitude)."""
     from fogbayes.diagnose.terms import design
-    from fogbayes.inference import noise_ssm as ns
+    from fogbayes.inference import noise_fit as nfit
 
     X = ctx.block_design(list(base))
     F = design(list(base), ctx.cov)
     if effect_col is not None:
         X = np.column_stack([X, ctx.grid.mean(effect_col)])
         F = np.column_stack([F, effect_col])
-    nf = ns.fit_noise(ctx.spec, ctx.y, X, ctx.grid.mask, ctx.grid.w)
+    nf = nfit.fit_noise(ctx.spec, ctx.y, X, ctx.grid.mask, ctx.grid.w)
     return F @ nf.beta, nf.loglik
 
 

@@ -111,7 +111,7 @@ def test_a_step_is_searched_at_every_block_boundary():
     from fogbayes.diagnose import evidence as ev
     from fogbayes.diagnose.fitting import fit_terms
     from fogbayes.diagnose.reml import with_reml
-    from fogbayes.inference import noise_ssm as ns
+    from fogbayes.inference import noise_fit as nfit
     from fogbayes.simulate import simulate
 
     sim = simulate("paper004", seed=1, effects={"step": {}})
@@ -120,8 +120,8 @@ def test_a_step_is_searched_at_every_block_boundary():
     step = [c for c in candidates_for(ctx, fit.terms) if c.effect == "step"][0]
     times = np.array([t.params["time"] for t in step.grid])
     assert np.allclose(np.diff(times), ctx.grid.dt)  # every block boundary
-    nf = ns.fit_noise(fit.noise.spec._replace(random_walk=False), ctx.y, fit.X,
-                      ctx.grid.mask, ctx.grid.w)  # the walk-free look of the loop
+    nf = nfit.fit_noise(fit.noise.spec._replace(random_walk=False), ctx.y, fit.X,
+                        ctx.grid.mask, ctx.grid.w)  # the walk-free look of the loop
     _, (s,) = ev.screen(ctx, with_reml(ctx, fit._replace(noise=nf), {}), [step], n_sims=100,
                         seed=0)
     true = sim.truth.params["effects"]["step"]["time"]

@@ -8,6 +8,7 @@ import pytest
 
 from fogbayes.diagnose import nullsim
 from fogbayes.inference import noise_ssm as ns
+from fogbayes.inference import noise_fit as nfit
 
 
 def dense_cov(spec, theta, n, w):
@@ -59,7 +60,7 @@ def test_gls_matches_dense_generalised_least_squares(problem):
 
 def test_gradient_based_fit_does_not_lose_to_the_truth(problem):
     spec, theta, y, X, mask, w, _ = problem
-    fit = ns.fit_noise(spec, y, X, mask, w)
+    fit = nfit.fit_noise(spec, y, X, mask, w)
     at_truth = ns.gls(spec, theta, y, X, mask, w).loglik
     assert fit.loglik >= at_truth - 1e-6  # the ML fit cannot be worse than the true values
 
@@ -141,7 +142,7 @@ def test_reml_gives_the_slow_noise_back_that_ml_loses():
     ml, reml = [], []
     for seed in range(16):
         y = nullsim.simulate(spec, np.array([truth]), 1.0, np.ones(n), 1, seed=seed)[:, 0]
-        fit = ns.fit_noise(spec, y, X)
+        fit = nfit.fit_noise(spec, y, X)
         ml.append(fit.theta[0])
         reml.append(reml_theta(fit, y, X, np.ones(n), np.ones(n))[0])
     ml, reml = np.array(ml), np.array(reml)

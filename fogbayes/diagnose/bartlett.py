@@ -37,9 +37,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..inference.noise_fit import fit_noise_many
 from ..inference.noise_ssm import unpack
 from .context import Context
-from .fitting import ModelFit, fit_terms
+from .fitting import ModelFit
 from .nullsim import simulate
 
 #: log(random-walk / white variance ratio) above which a fit counts as in the walk mode.
@@ -66,18 +67,22 @@ def leaves_walk_mode(base: ModelFit, alt: ModelFit) -> bool:
 
 def null_ratios(ctx: Context, base: ModelFit, alt: ModelFit, n_sims: int, *,
                 seed: int) -> np.ndarray:
-    """Refitted ratios 2(logL_alt - logL_base) of ``n_sims`` series simulated under ``base``."""
+    """Refitted ratios 2(logL_alt - logL_base) of ``n_sims`` series simulated under ``base``.
+
+    Both models are refitted on every series as :func:`~fogbayes.diagnose.fitting.fit_terms` would (the same starts,
+    the base fit's noise hyperparameters among them); the 2 ``n_sims`` fits run in lockstep
+    (:func:`fogbayes.inference.noise_fit.fit_noise_many`)."""
     nf = base.noise
     noise = simulate(nf.spec, nf.theta, nf.sigma2, ctx.grid.w, n_sims, seed=seed)
     mean = base.X @ nf.beta
     observed = ctx.grid.mask > 0
-    ratios = np.empty(n_sims)
-    for k in range(n_sims):
-        sim = ctx._replace(y=np.where(observed, mean + noise[:, k], 0.0))
-        f0 = fit_terms(sim, base.terms, spec=nf.spec, theta0=nf.theta, residual=False)
-        f1 = fit_terms(sim, alt.terms, spec=nf.spec, theta0=nf.theta, residual=False)
-        ratios[k] = max(2.0 * (f1.loglik - f0.loglik), 0.0)
-    return ratios
+    ys = [np.where(observed, mean + noise[:, k], 0.0) for k in range(n_sims)]
+    X0, X1 = ctx.block_design(list(base.terms)), ctx.block_design(list(alt.terms))
+    fits = fit_noise_many(nf.spec, [y for y in ys for _ in (0, 1)], [X0, X1] * n_sims,
+                          ctx.grid.mask, ctx.grid.w,
+                          extra_starts=[np.atleast_2d(nf.theta)] * (2 * n_sims))
+    ll = np.array([f.loglik for f in fits]).reshape(n_sims, 2)
+    return np.maximum(2.0 * (ll[:, 1] - ll[:, 0]), 0.0)
 
 
 def bartlett_factor(ctx: Context, base: ModelFit, alt: ModelFit, dof: int, *,

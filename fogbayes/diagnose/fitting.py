@@ -12,6 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..inference import noise_ssm as ns
+from ..inference import noise_fit as nfit
 from .context import Context
 from .terms import Term, design
 
@@ -21,7 +22,7 @@ class ModelFit(NamedTuple):
 
     terms: tuple[Term, ...]
     X: np.ndarray             # (nb, p) block design
-    noise: ns.NoiseFit
+    noise: nfit.NoiseFit
     residual: np.ndarray      # (n,) rate - X_full beta (deg/h)
 
     @property
@@ -49,7 +50,7 @@ def fit_terms(ctx: Context, terms, *, spec: ns.NoiseSpec | None = None, theta0=N
     extra = None
     if theta0 is not None and np.size(theta0) == spec.n_theta:
         extra = np.atleast_2d(theta0)
-    nf = ns.fit_noise(spec, ctx.y, X, ctx.grid.mask, ctx.grid.w, extra_starts=extra)
+    nf = nfit.fit_noise(spec, ctx.y, X, ctx.grid.mask, ctx.grid.w, extra_starts=extra)
     res = ctx.rate - design(list(terms), ctx.cov) @ nf.beta if residual else np.zeros(0)
     return ModelFit(terms, X, nf, res)
 

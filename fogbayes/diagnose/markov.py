@@ -21,6 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..inference import noise_ssm as ns
+from ..inference import noise_fit as nfit
 from . import nullsim
 from .context import Context
 from .fitting import ModelFit
@@ -85,6 +86,6 @@ def refit_markov(ctx: Context, fit: ModelFit, start_term: Term) -> ModelFit:
     spec, alt = fit.noise.spec, _alt(fit.noise.spec)
     start = _alt_theta(spec, fit.noise.theta, start_term.params["logvar"],
                        math.log(start_term.params["tau"]))
-    nf = ns.fit_noise(alt, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w, extra_starts=start[None])
+    nf = nfit.fit_noise(alt, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w, extra_starts=start[None])
     resid = ctx.rate - design(list(fit.terms), ctx.cov) @ nf.beta
     return ModelFit(fit.terms, fit.X, nf, resid)

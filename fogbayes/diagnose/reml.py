@@ -27,6 +27,7 @@ import numpy as np
 from scipy import optimize
 
 from ..inference import noise_ssm as ns
+from ..inference import noise_fit as nfit
 
 
 @partial(jax.jit, static_argnums=0)
@@ -71,7 +72,7 @@ def _starts(spec: ns.NoiseSpec, theta: np.ndarray) -> np.ndarray:
     return np.array(rows)
 
 
-def reml_theta(nf: ns.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
+def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
                n_starts: int = 2) -> np.ndarray:
     """REML hyperparameters of the model (``nf``: its ML noise fit).
 

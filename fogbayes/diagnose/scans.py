@@ -36,6 +36,7 @@ from scipy import stats
 from scipy.ndimage import median_filter
 
 from ..inference import noise_ssm as ns
+from ..inference import noise_fit as nfit
 from . import nullsim
 from .context import Context
 from .evidence import _periodogram, frequency_grid, whiten_columns
@@ -116,7 +117,7 @@ def covariate_scans(ctx: Context, fit: ModelFit, alpha: float) -> list[dict]:
         fixed = ns.gls(spec, fit.noise.theta, ctx.y, X1, ctx.grid.mask, ctx.grid.w).loglik
         if stats.chi2.sf(2.0 * (fixed - fit.loglik), k) >= 0.1 / len(covs):
             continue  # not even suggestive at the current noise model (as the loop's gate)
-        alt = ns.fit_noise(spec, ctx.y, X1, ctx.grid.mask, ctx.grid.w,
+        alt = nfit.fit_noise(spec, ctx.y, X1, ctx.grid.mask, ctx.grid.w,
                            extra_starts=fit.noise.theta[None] if fit.noise.theta.size else None)
         lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
         p = float(stats.chi2.sf(lr, k))

@@ -24,7 +24,7 @@ and the exact profile likelihood (beta and s2 maximised) cost O(n d^2 + n d C)::
     log L = -1/2 [ n_obs log(2 pi s2) + sum_t m_t log F_t + n_obs ]
 
 Noise hyperparameters (log relative variances, log time constants) are fitted by maximum
-likelihood with L-BFGS-B on the jitted gradient. The whitened columns v_t / sqrt(F_t)
+likelihood with L-BFGS-B on the jitted gradient (:mod:`fogbayes.inference.noise_fit`). The whitened columns v_t / sqrt(F_t)
 (iid N(0, s2) under the model) are what the evidence code works with.
 """
 
@@ -38,7 +38,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
-from scipy import optimize
 
 Array = jax.Array
 
@@ -257,6 +256,17 @@ def _negll_starts(spec, thetas, y, X, mask, w, pad):
     return jax.vmap(lambda th: _negll(spec, th, y, X, mask, w, pad))(thetas)
 
 
+@partial(jax.jit, static_argnums=0)
+def _negll_and_grad_batch(spec, thetas, ys, Xs, pads, mask, w):
+    """negll and gradient of many fits on one block grid: row i is ``thetas[i]`` on
+    ``(ys[i], Xs[i], pads[i])``, one vmapped filter pass for all
+    (:func:`fogbayes.inference.noise_fit.fit_noise_many`)."""
+    def one(th, y, X, pad):
+        return jax.value_and_grad(lambda t: _negll(spec, t, y, X, mask, w, pad))(th)
+
+    return jax.vmap(one)(thetas, ys, Xs, pads)
+
+
 def pad_columns(X: np.ndarray, multiple: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """Pad X with zero columns to a multiple of ``multiple`` (one compiled shape per size)."""
     X = np.asarray(X, dtype=float)
@@ -267,104 +277,6 @@ def pad_columns(X: np.ndarray, multiple: int = 8) -> tuple[np.ndarray, np.ndarra
     pad = np.zeros(P)
     pad[p:] = 1.0
     return Xp, pad
-
-
-class NoiseFit(NamedTuple):
-    """Maximum-likelihood noise fit: spec, theta (unconstrained), the GLS at theta, p."""
-
-    spec: NoiseSpec
-    theta: np.ndarray
-    loglik: float
-    beta: np.ndarray
-    cov_beta: np.ndarray
-    sigma2: float
-    converged: bool
-    n_params: int
-
-
-def _starts(spec: NoiseSpec, theta0) -> np.ndarray:
-    """A small grid of starting points (the likelihood can have several modes)."""
-    if theta0 is not None:
-        return np.atleast_2d(np.asarray(theta0, float))
-    grid = []
-    for lf in (-6.0, -2.0, 1.0):
-        for lrw in (-14.0, -8.0, -3.0):
-            row = []
-            if spec.bank_taus:
-                row.append(lf)
-            if spec.random_walk:
-                row.append(lrw)
-            for j in range(spec.n_markov):
-                row.append(-1.0)
-            for j in range(spec.n_markov):
-                row.append(math.log(max(30.0 * spec.dt * 4 ** j, spec.dt)))
-            grid.append(row)
-    g = np.unique(np.asarray(grid, float), axis=0)
-    return g
-
-
-def _diverse(starts: np.ndarray, vals: np.ndarray, k: int, gap: float = 3.0) -> list[np.ndarray]:
-    """Up to k starts, best first, each differing by > ``gap`` (log units) from those taken."""
-    out: list[np.ndarray] = []
-    for i in np.argsort(vals):
-        if not np.isfinite(vals[i]):
-            break
-        if all(np.max(np.abs(starts[i] - o)) > gap for o in out):
-            out.append(starts[i])
-        if len(out) == k:
-            break
-    return out or [starts[0]]
-
-
-def fit_noise(spec: NoiseSpec, y, X, mask=None, w=None, *, theta0=None,
-              extra_starts=None, maxiter: int = 200, n_starts: int = 3) -> NoiseFit:
-    """Maximum-likelihood noise hyperparameters with beta and s2 profiled out (L-BFGS-B).
-
-    Args:
-        spec: noise structure; y (n,) block means; X (n, p) design (centred/scaled).
-        mask: (n,) 1 observed / 0 missing block; w: (n,) white-variance weights.
-        theta0: start (skips the start grid); extra_starts: more candidate starts.
-    """
-    y = np.asarray(y, float)
-    n = y.size
-    mask = np.ones(n) if mask is None else np.asarray(mask, float)
-    w = np.ones(n) if w is None else np.asarray(w, float)
-    Xp, pad = pad_columns(X)
-    args = tuple(jnp.asarray(a) for a in (np.where(mask > 0, y, 0.0), Xp, mask, w, pad))
-    p = int(X.shape[1])
-    if spec.n_theta == 0:
-        r = gls(spec, np.zeros(0), y, X, mask, w)
-        return NoiseFit(spec, np.zeros(0), r.loglik, r.beta, r.cov_beta, r.sigma2, True, p)
-    starts = _starts(spec, theta0)
-    if extra_starts is not None:
-        starts = np.vstack([starts, np.atleast_2d(extra_starts)])
-    lo, hi = np.array(bounds(spec)).T
-    starts = np.clip(starts, lo, hi)
-    rows = -(-len(starts) // 8) * 8  # few distinct shapes: few compilations
-    padded = np.vstack([starts, np.repeat(starts[:1], rows - len(starts), axis=0)])
-    vals = np.asarray(_negll_starts(spec, jnp.asarray(padded), *args), dtype=float)[:len(starts)]
-    vals = np.where(np.isfinite(vals), vals, np.inf)
-
-    def fun(th):
-        v, g = _negll_and_grad(spec, jnp.asarray(th), *args)
-        v, g = float(v), np.asarray(g, dtype=float)
-        if not np.isfinite(v) or not np.all(np.isfinite(g)):
-            return 1e300, np.zeros_like(th)
-        return v, g
-
-    # The likelihood is often bimodal (a random walk or the flicker bank explaining the same
-    # slow wander): optimise from the best start of each distinct region, keep the best.
-    best = None
-    for x0 in _diverse(starts, vals, n_starts):
-        r = optimize.minimize(fun, x0, jac=True, method="L-BFGS-B", bounds=bounds(spec),
-                              options={"maxiter": maxiter})
-        if best is None or r.fun < best.fun:
-            best = r
-    res = best
-    theta = np.asarray(res.x)
-    r = gls(spec, theta, y, X, mask, w)
-    return NoiseFit(spec, theta, r.loglik, r.beta, r.cov_beta, r.sigma2,
-                    bool(np.isfinite(res.fun)), p)
 
 
 @partial(jax.jit, static_argnums=0)

@@ -37,7 +37,7 @@ from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
 from .._lazy import host_device
-from ..inference import noise_ssm as ns
+from ..inference import noise_fit as nfit
 from ..thermal.workflow import DEFAULT_ORDERS
 from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
@@ -205,7 +205,7 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
     spec = fit.noise.spec
     if in_walk_mode(fit):
         alt_spec = spec._replace(random_walk=False)
-        nf = ns.fit_noise(alt_spec, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w)
+        nf = nfit.fit_noise(alt_spec, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w)
         wm2, screened2 = ev.screen(ctx, with_reml(ctx, fit._replace(noise=nf), cache), cands,
                                    n_sims=opts.n_sims, seed=seed + 1)
         for s2 in screened2:

@@ -28,6 +28,7 @@ from ..diagnose.fitting import ModelFit
 from ..diagnose.markov import markov_log_p, markov_start, refit_markov
 from ..diagnose.terms import design
 from ..inference import noise_ssm as ns
+from ..inference import noise_fit as nfit
 
 #: most Gauss-Markov components the loop considers (beyond white, flicker and walk)
 MAX_COMPONENTS = 2
@@ -50,7 +51,7 @@ def best_with_fewer(ctx: Context, fit: ModelFit) -> ModelFit | None:
     best = None
     for j in range(spec.n_markov):
         red, start = _without(spec, fit.noise.theta, j)
-        nf = ns.fit_noise(red, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w,
+        nf = nfit.fit_noise(red, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w,
                           extra_starts=start[None] if start.size else None)
         if best is None or nf.loglik > best.loglik:
             best = nf

@@ -1,0 +1,95 @@
+"""Minimisations in lockstep take the steps they would take alone.
+
+References: SciPy's L-BFGS-B run on its own (``minimize_one_by_one``, which is
+``scipy.optimize.minimize`` with the same options) for the lockstep driver; one
+``fit_noise`` per problem for ``fit_noise_many`` (the vmapped program may round
+differently from the unbatched one, so optima are compared to 1e-8 in log-likelihood: far
+below the 0.5-unit differences the evidence rules act on).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import optimize
+
+from fogbayes.inference.lockstep import minimize_lockstep, minimize_one_by_one
+
+
+def _rosenbrock_batch(shifts):
+    """Shifted Rosenbrock functions, problem i shifted by shifts[i]; the last problem is NaN
+    (a failed point) wherever x0 < 0."""
+    calls = []
+
+    def batch(rows, xs):
+        calls.append(rows.copy())
+        x = xs - shifts[rows]
+        a, b = x[:, 0], x[:, 1]
+        f = (1 - a) ** 2 + 100 * (b - a * a) ** 2
+        g = np.column_stack([-2 * (1 - a) - 400 * a * (b - a * a), 200 * (b - a * a)])
+        bad = (rows == len(shifts) - 1) & (xs[:, 0] < 0.0)
+        return np.where(bad, np.nan, f), np.where(bad[:, None], np.nan, g)
+
+    return batch, calls
+
+
+def test_lockstep_runs_equal_the_runs_alone():
+    rng = np.random.default_rng(0)
+    shifts = 0.5 * np.abs(rng.normal(size=(7, 2)))  # minima (1, 1) + shift: inside the box
+    starts = [np.array([-1.2, 1.0]) + rng.normal(scale=0.3, size=2) for _ in range(7)]
+    bounds = [(-1.6, 3.0), (-2.0, 4.0)]
+    batch, calls = _rosenbrock_batch(shifts)
+    together = minimize_lockstep(batch, starts, bounds)
+    alone = minimize_one_by_one(_rosenbrock_batch(shifts)[0], starts, bounds)
+    assert max(len(c) for c in calls) == 7          # evaluated together
+    assert sum(len(c) for c in calls) == sum(r.nfev for r in alone)
+    for r1, r0 in zip(together, alone):
+        assert r1.nit == r0.nit and r1.nfev == r0.nfev
+        np.testing.assert_array_equal(r1.x, r0.x)
+    for r, s in zip(together[:-1], shifts):
+        np.testing.assert_allclose(r.x, s + 1.0, atol=1e-4)  # the shifted minimum (1, 1)
+    # the same as SciPy's own minimize on the scalar function
+    one = _rosenbrock_batch(shifts)[0]
+    f = lambda x: tuple(v[0] for v in one(np.array([0]), x[None]))  # noqa: E731
+    ref = optimize.minimize(f, starts[0], jac=True, method="L-BFGS-B", bounds=bounds)
+    np.testing.assert_array_equal(together[0].x, ref.x)
+
+
+def test_an_error_of_the_batch_stops_every_run_and_is_raised():
+    def batch(rows, xs):
+        if xs.shape[0] and np.any(np.abs(xs) > 0.5):
+            raise FloatingPointError("boom")
+        return np.sum(xs ** 2, axis=1), 2 * xs
+
+    with pytest.raises(FloatingPointError, match="boom"):
+        minimize_lockstep(batch, [np.array([1.0]), np.array([0.1]), np.array([2.0])],
+                          [(-5.0, 5.0)])
+
+
+def test_fit_noise_many_equals_one_fit_per_problem():
+    from fogbayes.inference import noise_ssm as ns
+    from fogbayes.inference.noise_fit import fit_noise, fit_noise_many
+    from fogbayes.diagnose.nullsim import simulate
+
+    spec = ns.make_spec(10.0, 6000.0, n_markov=1)
+    n = 600
+    rng = np.random.default_rng(3)
+    theta = np.array([-1.0, -9.0, 0.0, np.log(300.0)])
+    noise = simulate(spec, theta, 1.0, np.ones(n), 4, seed=1)
+    t = np.linspace(-1, 1, n)
+    X0 = np.column_stack([np.ones(n), t])
+    X1 = np.column_stack([np.ones(n), t, t ** 2, np.sin(3 * t)])
+    X2 = np.column_stack([np.ones(n)] + [t ** k for k in range(1, 10)])  # 10 columns: pads to 16
+    mask = (rng.random(n) > 0.05).astype(float)
+    ys = [0.3 + noise[:, k] for k in range(4)]
+    Xs = [X0, X1, X2, X0]
+    many = fit_noise_many(spec, ys, Xs, mask, np.ones(n),
+                          extra_starts=[None, theta[None], None, theta[None]])
+    for y, X, e, got in zip(ys, Xs, [None, theta[None], None, theta[None]], many):
+        ref = fit_noise(spec, y, X, mask, np.ones(n), extra_starts=e)
+        assert got.n_params == X.shape[1] and got.converged
+        assert got.loglik == pytest.approx(ref.loglik, rel=1e-8, abs=1e-8)
+        # theta to 1e-3 only: a negligible walk (log ratio -22) sits on a flat likelihood,
+        # where rounding moves the optimum along it (measured 3e-5) without changing logL
+        np.testing.assert_allclose(got.theta, ref.theta, atol=1e-3)
+        np.testing.assert_allclose(got.beta, ref.beta, rtol=1e-6, atol=1e-9)
