@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/bench_loop.py study [--quick] [--workers 2] [--out benchmarks/loop_study.json]
+    python benchmarks/bench_loop.py study [--quick] [--noise walk] [--workers 2] [--out F.json]
     python benchmarks/bench_loop.py timing           # 6 h, 10 Hz record through `fogbayes loop`
     python benchmarks/bench_loop.py measured         # ADIS16405 (allan) and PAN TVAC (bias-t)
     python benchmarks/bench_loop.py detectability    # right first among what the oracle detects
@@ -105,7 +105,10 @@ def run_case(case: dict) -> dict:
 CLEAN_SEEDS = {"bias-t": 15, "composite": 6}
 
 
-def cases(quick: bool, effects: tuple[str, ...] | None = None, first_seed: int = 0) -> list[dict]:
+def cases(quick: bool, effects: tuple[str, ...] | None = None, first_seed: int = 0,
+          noise_mix: str | None = None) -> list[dict]:
+    """The study's records; ``quick``: seeds 0-1 (2 clean) of configurations A, B and the rate
+    table, or of the one configuration whose noise mix is ``noise_mix``."""
     seeds = tuple(first_seed + k for k in ((0, 1) if quick else (0, 1, 2)))
     grid = []
 
@@ -116,14 +119,16 @@ def cases(quick: bool, effects: tuple[str, ...] | None = None, first_seed: int =
         if not want(eff):
             continue
         for mag, noise, fs, dur, prof in CONFIGS:
-            if quick and noise in ("walk", "white"):
+            if noise_mix is not None and noise != noise_mix:
+                continue
+            if quick and noise_mix is None and noise in ("walk", "white"):
                 continue
             for sd in (range(first_seed, first_seed + CLEAN_SEEDS["bias-t"]) if eff is None
                        and not quick else seeds):
                 grid.append(dict(effect=eff, model="bias-t", profile=prof, magnitude=mag,
                                  noise=noise, fs=fs, duration=float(dur), seed=sd))
     for eff in RATE_TABLE + (None,):
-        if not want(eff):
+        if not want(eff) or noise_mix is not None:
             continue
         for mag, noise, fs in [(1.0, "default", 10.0), (0.1, "flicker", 2.0)]:
             for sd in (range(first_seed, first_seed + CLEAN_SEEDS["composite"]) if eff is None
@@ -206,7 +211,7 @@ def run_cases(todo: list[dict], out: str, workers: int, fn=run_case) -> list[dic
 
 def study(args) -> None:
     todo = cases(args.quick, tuple(args.effects.split(",")) if args.effects else None,
-                 args.first_seed)
+                 args.first_seed, args.noise)
     print(summarise(run_cases(todo, args.out, args.workers)))
 
 
@@ -479,6 +484,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=6)
     ap.add_argument("--effects", default=None, help="comma-separated effect names (None = clean)")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--noise", default=None, choices=("default", "flicker", "walk", "white"),
+                    help="only the configuration with this noise mix (thermal records)")
     ap.add_argument("--first-seed", type=int, default=0,
                     help="study: seeds from here (fresh seeds test the method on unseen records)")
     ap.add_argument("--workers", type=int, default=2)
