@@ -6,7 +6,7 @@ running minimisation has posted (or finished), the posted points are evaluated b
 of ``batch(rows, points) -> (values (b,), grads (b, d))`` and the waiters resume. So each
 minimisation takes exactly the steps it would take alone, while the expensive part (here a
 vmapped Kalman filter and its gradient) runs once per round for all of them: on the 2-core
-box one value-and-gradient of a 900-block filter costs 5.9 ms alone and 15 ms for 10 at once
+box one value-and-gradient of a 900-block filter costs 9.7 ms alone and 39 ms for 16 at once
 (benchmarks/RESULTS_loop.md).
 
 ``rows[i]`` says which minimisation (index into the starts) asked for ``points[i]``, so the
