@@ -27,7 +27,7 @@ import numpy as np
 
 from .lockstep import minimize_lockstep, minimize_one_by_one
 from .noise_ssm import (NoiseSpec, _negll_and_grad, _negll_and_grad_batch, _negll_starts, bounds,
-                        gls)
+                        gls, pad_columns, padded_width)
 
 #: Batch sizes of the vmapped objective (rows padded up to one of these, larger rounds
 #: split): few compiled shapes per noise structure. One row uses the unbatched program.
@@ -108,17 +108,6 @@ def _objective(spec: NoiseSpec, problems: list[tuple], mask, w):
     return batch
 
 
-def _padded(X: np.ndarray, P: int) -> tuple[np.ndarray, np.ndarray]:
-    """X with zero columns up to P, and the ridge that keeps their normal equations regular
-    (a padded column gets beta 0 and leaves the likelihood unchanged)."""
-    p = X.shape[1]
-    Xp = np.zeros((X.shape[0], P))
-    Xp[:, :p] = X
-    pad = np.zeros(P)
-    pad[p:] = 1.0
-    return Xp, pad
-
-
 def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
                    extra_starts=None, maxiter: int = 200, n_starts: int = 3) -> list[NoiseFit]:
     """:func:`fit_noise` of every problem ``(ys[k], Xs[k])`` on one block grid (``mask``, ``w``).
@@ -141,8 +130,8 @@ def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
             out.append(NoiseFit(spec, np.zeros(0), r.loglik, r.beta, r.cov_beta, r.sigma2,
                                 True, int(X.shape[1])))
         return out
-    P = max(8, max(int(math.ceil(X.shape[1] / 8)) * 8 for X in Xs))  # one shape for all
-    problems = [(np.where(mask > 0, y, 0.0), *_padded(X, P)) for y, X in zip(ys, Xs)]
+    P = max(padded_width(X.shape[1]) for X in Xs)  # one shape for all
+    problems = [(np.where(mask > 0, y, 0.0), *pad_columns(X, width=P)) for y, X in zip(ys, Xs)]
     lo, hi = np.array(bounds(spec)).T
     mask_j, w_j = jnp.asarray(mask), jnp.asarray(w)
     owner, x0s = [], []

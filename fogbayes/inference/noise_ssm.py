@@ -267,11 +267,19 @@ def _negll_and_grad_batch(spec, thetas, ys, Xs, pads, mask, w):
     return jax.vmap(one)(thetas, ys, Xs, pads)
 
 
-def pad_columns(X: np.ndarray, multiple: int = 8) -> tuple[np.ndarray, np.ndarray]:
-    """Pad X with zero columns to a multiple of ``multiple`` (one compiled shape per size)."""
+def padded_width(p: int, multiple: int = 8) -> int:
+    """Columns after padding ``p`` to a multiple of ``multiple`` (one compiled shape per size)."""
+    return max(multiple, int(math.ceil(p / multiple)) * multiple)
+
+
+def pad_columns(X: np.ndarray, multiple: int = 8, *,
+                width: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Pad X with zero columns to ``width`` (default :func:`padded_width`), and the ridge
+    ``pad`` that keeps their normal equations regular: a padded column gets beta 0 and
+    leaves the likelihood unchanged."""
     X = np.asarray(X, dtype=float)
     p = X.shape[1]
-    P = max(multiple, int(math.ceil(p / multiple)) * multiple)
+    P = padded_width(p, multiple) if width is None else int(width)
     Xp = np.zeros((X.shape[0], P))
     Xp[:, :p] = X
     pad = np.zeros(P)
