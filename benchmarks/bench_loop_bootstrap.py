@@ -52,7 +52,9 @@ print(json.dumps({"seconds": time.perf_counter() - t0, "effects": res.effects,
 
 
 def run_case(tree: Path, case: dict) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(tree), "MPLBACKEND": "Agg"}
+    # the tree first; keep what the caller had on the path (packages installed beside it)
+    path = os.pathsep.join(p for p in (str(tree), os.environ.get("PYTHONPATH", "")) if p)
+    env = {**os.environ, "PYTHONPATH": path, "MPLBACKEND": "Agg"}
     out = subprocess.run([sys.executable, "-c", ONE, json.dumps(case)], env=env, cwd=tree,
                          capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
