@@ -358,11 +358,14 @@ def choose_iterations(p: FullParams, sc: Scaling, box, T_range, W_range, *,
 
 def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_range,
                       method: str = "halley", iterations: int | None = None,
-                      rtol: float = 1e-9) -> Compensator:
+                      rtol: float = 1e-9, host: bool | None = None) -> Compensator:
     """A ready-to-call :class:`Compensator` (box and iteration count fixed here, once).
 
     ``rtol`` = 1e-9 (1e-7 %) is far below any gyro's noise and the done-when's 1e-4 %, and
     for paper 000's coefficients gives Halley 2 iterations, the paper's own count.
+    ``host``: calls go to the compiled CPU loop (True), to XLA on JAX's default device
+    (False), or to the loop where that device is the CPU (None). Streams pass True: their
+    chunks start and end in host memory, where a GPU only adds two transfers a chunk.
     """
     if isinstance(p, ProductParams):
         p = product_to_full(p)
@@ -385,7 +388,7 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
     stream_fn = jax.jit(lambda U, T, t: _rate(consts, sc_f, box, U, T, t, **kw),
                         donate_argnums=0)
     loop = None
-    if jax.default_backend() == "cpu":  # one compiled pass per sample, at memory speed
+    if host or (host is None and jax.default_backend() == "cpu"):  # one pass at memory speed
         from .compensate_loop import compile_loop
 
         loop = compile_loop(consts, sc_f, box, **kw)

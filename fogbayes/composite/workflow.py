@@ -216,7 +216,8 @@ def _params_from_doc(fit: dict) -> tuple[FullParams, Scaling, Orders]:
     return unpack(theta, orders), sc, orders
 
 
-def compensator_from_fit(fit: dict, *, method: str | None = None) -> Compensator:
+def compensator_from_fit(fit: dict, *, method: str | None = None,
+                         host: bool | None = None) -> Compensator:
     p, sc, _ = _params_from_doc(fit)
     cal = fit["calibrated"]
     comp = fit.get("compensation", {})
@@ -224,7 +225,7 @@ def compensator_from_fit(fit: dict, *, method: str | None = None) -> Compensator
     iters = comp.get("iterations") if method == comp.get("method") else None
     return build_compensator(p, sc, T_range=tuple(cal["temperature"]),
                              W_range=tuple(cal["rate"]), method=method, iterations=iters,
-                             rtol=1e-9)
+                             rtol=1e-9, host=host)
 
 
 def _inputs(rec, fit: dict):

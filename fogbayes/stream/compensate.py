@@ -2,8 +2,9 @@
 
 :func:`compensate_stream` does what :func:`fogbayes.thermal.workflow.compensate_recording`
 (``bias-t``, ``thermal``) and :func:`fogbayes.composite.workflow.compensate_recording`
-(``composite``) do, with the same jitted compensators, one fixed-size chunk at a time (the
-last chunk is padded to that size, so the compensator compiles once):
+(``composite``) do, with the same compensators as compiled CPU loops (chunks live in host
+memory, whatever JAX's default device), one fixed-size chunk at a time (the last chunk is
+padded to that size, so the compensator compiles once):
 
 * bias-t / thermal: covariates per chunk (:mod:`.covariates`, with the record's time scan
   when a temperature rate is used), clamped to the fit's valid range, ``y - X(z) @ coef`` in
@@ -14,9 +15,10 @@ last chunk is padded to that size, so the compensator compiles once):
 * composite: the operating time (time since the last input-rate step, carried across
   chunks) and the Halley inversion; ``outlier`` where it is not invertible. One pass.
 
-Results equal the in-memory path: bit for bit for bias-t, composite and the block-difference
-temperature rates; to rounding (~1e-15 of the temperature-rate term) with Savitzky-Golay
-windows longer than 501 samples (FFT) -- see :mod:`.covariates`. Output columns as the
+Results equal the in-memory path where JAX runs on the CPU: bit for bit for bias-t, composite
+and the block-difference temperature rates; to rounding (~1e-15 of the temperature-rate term)
+with Savitzky-Golay windows longer than 501 samples (FFT) -- see :mod:`.covariates`. With a GPU
+as JAX's default the in-memory path runs XLA there: equal to rounding (1.8e-15 deg/h). Output columns as the
 in-memory dicts: ``time`` (optional), ``output`` (``rate`` for composite), ``outlier``.
 """
 
@@ -27,7 +29,6 @@ from functools import partial
 from pathlib import Path
 from typing import NamedTuple
 
-import jax
 import numpy as np
 
 from ..errors import FogbayesError, UnitError
@@ -109,7 +110,7 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
 
 
 def _thermal(source, fit, out, rows, flags, include_time, metrics, dtype):
-    from ..thermal.compensate import bias_compensator
+    from ..thermal.compensate_loops import compensate_into
     from ..export.coefficients import basis_from_dict
     from ..thermal.model import ThermalSpec
     from ..thermal.data import Processing
@@ -135,9 +136,11 @@ def _thermal(source, fit, out, rows, flags, include_time, metrics, dtype):
                      rate_window_s=proc.rate_window_s)
     coef = np.asarray(p["coef"], dtype=float)
     valid = p.get("valid_range")
-    f = bias_compensator(basis).single
-    if jax.default_backend() == "cpu":  # many chunks: the compiled loop, never the one-off
-        f = partial(f, method="loop")   # NumPy path of compensate_loops
+    # Chunks start and end in host memory: the compiled CPU loop, whatever JAX's default
+    # device (on an H200 machine XLA on the GPU took 18.2 s and 4.3 GB of peak memory for
+    # 2e8 samples, the loop 10.2 s and 0.7 GB: benchmarks/RESULTS_gpu.md). "loop": many
+    # chunks, never the one-off NumPy path.
+    f = partial(compensate_into, basis, method="loop")
     fields = ("time", "output", "temperatures") if include_time or scan or metrics \
         else ("output", "temperatures")
 
@@ -190,7 +193,7 @@ def _composite(source, fit, out, rows, include_time, dtype):
                         f"{unit}", file=source.source, column="output",
                         fix=f"open the recording with unit {unit}")
     source.require("time", "output", "temperature")
-    comp = compensator_from_fit(fit)
+    comp = compensator_from_fit(fit, host=True)  # host chunks: the CPU loop (see _thermal)
     conv = fit.get("operating_time", "cell")
     by_cell = conv == "cell" and source.input_rate_name is not None
     fields = ("time", "output", "temperatures") + (("input_rate",) if by_cell else ())
