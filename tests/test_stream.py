@@ -14,6 +14,7 @@ import subprocess
 import sys
 import warnings
 
+import jax
 import numpy as np
 import pytest
 
@@ -307,6 +308,12 @@ def test_thermal_compensation_is_bit_identical(thermal_run, tmp_path, model, opt
     res = compensate_stream(path, fit, tmp_path / out, rows=rows)
     got = _read(res.path, ("time", "output", "outlier"))
     for k in ("time", "output", "outlier"):
+        if k == "output" and jax.default_backend() != "cpu":
+            # on a GPU the in-memory path is XLA there, the stream the host loop: not bit
+            # for bit (H200, 2026-11-28); the GPU compensator agrees with NumPy to 1.8e-15
+            # deg/h (benchmarks/RESULTS_gpu.md), so 1e-12 leaves room for the covariates
+            np.testing.assert_allclose(got[k], ref[k], rtol=0, atol=1e-12)
+            continue
         assert np.array_equal(got[k], ref[k]), k  # same operations, same order: exact
     assert res.outliers == int(ref["outlier"].sum())
     if model == "thermal" and not opts:
