@@ -1,0 +1,73 @@
+"""A unit's covariance for the pool: resolved terms conditioned on the unresolved ones.
+
+Closed forms: for a resolved N correlated (rho) with an unresolved Q, the conditioned
+variance is sigma_N^2 (1 - rho^2), the Schur complement; with nothing unresolved the
+covariance is the fit's own. Then on a simulated fleet's unit whose Q, K and R are
+unresolved (``benchmarks/pool_allan_units.py``, unit 100; N off by 3.4 %): N's log sd
+drops from the marginal 0.22 to 0.053, which still covers that error.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fogbayes.allan.model import TERMS
+from fogbayes.pool.allan import UnitFit, resolved_covariance
+
+
+class _Term:
+    def __init__(self, low):
+        self.low = low
+
+
+def _unit(cov, unresolved=()):
+    terms = {t: _Term(0.0 if t in unresolved else 1.0) for t in TERMS}
+    return UnitFit("u", None, 1000, 10.0, np.zeros(5), np.asarray(cov, float), terms, 0, 0.5,
+                   True)
+
+
+def _cov(sd, corr):
+    sd = np.asarray(sd, float)
+    return np.outer(sd, sd) * np.asarray(corr, float)
+
+
+def test_the_resolved_terms_are_the_schur_complement_of_the_unresolved():
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(5, 5))
+    cov = a @ a.T + 0.1 * np.eye(5)
+    got = resolved_covariance(_unit(cov, unresolved=("Q", "K")))
+    r, c = [1, 2, 4], [0, 3]
+    schur = cov[np.ix_(r, r)] - cov[np.ix_(r, c)] @ np.linalg.inv(cov[np.ix_(c, c)]) @ cov[np.ix_(c, r)]
+    np.testing.assert_allclose(got[np.ix_(r, r)], schur, rtol=1e-12)
+    np.testing.assert_array_equal(np.diag(got)[c], np.diag(cov)[c])  # own variance kept
+    assert not got[np.ix_(r, c)].any() and got[0, 3] == 0.0           # and no covariance
+
+
+def test_two_terms_closed_form_and_nothing_unresolved_is_the_fit_itself():
+    corr = np.eye(5)
+    corr[0, 1] = corr[1, 0] = -0.95  # Q and N at the shortest taus
+    cov = _cov([0.6, 0.2, 0.15, 5.0, 0.4], corr)
+    got = resolved_covariance(_unit(cov, unresolved=("Q",)))
+    assert got[1, 1] == pytest.approx(0.2 ** 2 * (1 - 0.95 ** 2), rel=1e-12)
+    np.testing.assert_array_equal(resolved_covariance(_unit(cov)), cov)
+
+
+def test_a_unit_with_unresolved_q_k_r_keeps_its_n():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    import bench_pool as bp  # the fleets' simulator and single-unit fit
+
+    rng = np.random.default_rng(10_005)  # repetition 5, unit 0 of bench_pool.py
+    truth = [bp.unit_truth(rng) for _ in range(20)][0]
+    unit = bp.fit_record(bp.simulate(truth, 2 ** 17, seed=500_000), "u0")
+    unresolved = [t for t in TERMS if unit.terms[t].low <= 0.0]
+    assert set(unresolved) >= {"Q", "K", "R"}
+    n = TERMS.index("N")
+    marginal = np.sqrt(unit.cov[n, n])
+    conditioned = np.sqrt(resolved_covariance(unit)[n, n])
+    assert marginal > 0.2                       # the marginal: 0.22 in log, a factor 1.25
+    assert conditioned < 0.5 * marginal         # conditioned: 0.053
+    assert abs(np.log(unit.terms["N"].value / truth["N"])) < 1.645 * conditioned  # covers
