@@ -96,7 +96,8 @@ def resolved_covariance(unit: UnitFit) -> np.ndarray:
     r = ~cen
     if cen.any() and r.any():
         crc = cov[np.ix_(r, cen)]
-        cond = cov[np.ix_(r, r)] - crc @ np.linalg.pinv(cov[np.ix_(cen, cen)], hermitian=True) @ crc.T
+        inv_cc = np.linalg.pinv(cov[np.ix_(cen, cen)], hermitian=True)
+        cond = cov[np.ix_(r, r)] - crc @ inv_cc @ crc.T
         out[np.ix_(r, r)] = 0.5 * (cond + cond.T)
     elif not cen.any():
         out = cov.copy()

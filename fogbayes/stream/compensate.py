@@ -18,8 +18,9 @@ padded to that size, so the compensator compiles once):
 Results equal the in-memory path where JAX runs on the CPU: bit for bit for bias-t, composite
 and the block-difference temperature rates; to rounding (~1e-15 of the temperature-rate term)
 with Savitzky-Golay windows longer than 501 samples (FFT) -- see :mod:`.covariates`. With a GPU
-as JAX's default the in-memory path runs XLA there: equal to rounding (1.8e-15 deg/h). Output columns as the
-in-memory dicts: ``time`` (optional), ``output`` (``rate`` for composite), ``outlier``.
+as JAX's default the in-memory path runs XLA there: equal to rounding, not bit for bit.
+Output columns as the in-memory dicts: ``time`` (optional), ``output`` (``rate`` for
+composite), ``outlier``.
 """
 
 from __future__ import annotations
