@@ -92,15 +92,15 @@ def resolved_covariance(unit: UnitFit) -> np.ndarray:
     """
     cov = np.asarray(unit.cov, dtype=float)
     cen = np.array([t in unit.terms and unit.terms[t].low <= 0.0 for t in TERMS])
+    if not cen.any():
+        return cov.copy()
     out = np.diag(np.diag(cov))
     r = ~cen
-    if cen.any() and r.any():
+    if r.any():
         crc = cov[np.ix_(r, cen)]
         inv_cc = np.linalg.pinv(cov[np.ix_(cen, cen)], hermitian=True)
         cond = cov[np.ix_(r, r)] - crc @ inv_cc @ crc.T
         out[np.ix_(r, r)] = 0.5 * (cond + cond.T)
-    elif not cen.any():
-        out = cov.copy()
     return out
 
 
