@@ -3,8 +3,8 @@
 :func:`compensate_stream` does what :func:`fogbayes.thermal.workflow.compensate_recording`
 (``bias-t``, ``thermal``) and :func:`fogbayes.composite.workflow.compensate_recording`
 (``composite``) do, with the same compensators as compiled CPU loops (chunks live in host
-memory, whatever JAX's default device), one fixed-size chunk at a time (the last chunk is
-padded to that size, so the compensator compiles once):
+memory, whatever JAX's default device; a loop takes a chunk of any length, so nothing is
+padded or cut), one chunk at a time:
 
 * bias-t / thermal: covariates per chunk (:mod:`.covariates`, with the record's time scan
   when a temperature rate is used), clamped to the fit's valid range, ``y - X(z) @ coef`` in
@@ -54,32 +54,6 @@ class StreamCompensation(NamedTuple):
     iterations: int      # Pauta iterations (0 for composite)
     passes: int          # passes over the input, scan included
     metrics: dict | None = None  # metrics=True, bias-t/thermal: bias stability before/after
-
-
-#: Rows per compensator call: 2 MB per float64 column stays in cache and amortises the
-#: dispatch. Measured fused bias-t, GB/s moved: 11 at 2^16 rows, 17 at 2^18, 9 at 2^20;
-#: the library compensator 6 / 6 / 1.6 (the whole-array path of 4e6 samples: 0.6).
-KERNEL_ROWS = 1 << 18
-
-
-def _padded(f, rows: int, *arrays):
-    """``f(*arrays)`` with the arrays padded to ``rows`` (edge values), cut back after."""
-    n = arrays[0].shape[0]
-    if n == rows:
-        out = f(*arrays)
-    else:
-        out = f(*[np.concatenate([a, np.repeat(a[-1:], rows - n, axis=0)]) for a in arrays])
-    return tuple(np.asarray(o)[:n] for o in out) if isinstance(out, tuple) else np.asarray(out)[:n]
-
-
-def _pieces(f, rows: int, *arrays):
-    """``f`` applied to cache-sized pieces of one shape (one compilation), concatenated."""
-    n = arrays[0].shape[0]
-    piece = min(rows, KERNEL_ROWS)
-    parts = [_padded(f, piece, *(a[i:i + piece] for a in arrays)) for i in range(0, n, piece)]
-    if isinstance(parts[0], tuple):
-        return tuple(np.concatenate(p) for p in zip(*parts))
-    return np.concatenate(parts)
 
 
 def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags: bool = True,
@@ -151,7 +125,7 @@ def _thermal(source, fit, out, rows, flags, include_time, metrics, dtype):
                 z = clamp_covariates(z, basis, valid)
             rate = np.asarray(convert_rate(ch.output, source.unit, "deg/h",
                                            scale_factor=source.scale_factor), dtype=float)
-            yield ch, _pieces(lambda zz, yy: f(coef, zz, yy), rows, z, rate)
+            yield ch, f(coef, z, rate)
 
     passes = 0 if scan is None else scan.passes
     if metric_scan is not None and metric_scan is not scan:
@@ -211,7 +185,7 @@ def _composite(source, fit, out, rows, include_time, dtype):
                 origin_t = float(t[0]) if origin_t is None else origin_t
                 op = t - origin_t
             U, T = ch.output, ch.temperatures[:, 0]
-            rate, ok = _pieces(lambda a, b, c: tuple(comp(a, b, c)), rows, U, T, op)
+            rate, ok = comp(U, T, op)
             mask = ~np.asarray(ok)
             n_out += int(mask.sum())
             part = {"rate": np.asarray(rate, dtype=float), "outlier": mask}
