@@ -223,8 +223,9 @@ def roofline(args) -> dict:
         for name, f in (("library", bias_compensator(basis).single), ("matrix", matrix)):
             def run(f=f, coef=coef, z=z, into=in_place and name == "library"):
                 for a in range(0, n, c):
-                    if into:
-                        f(coef, z[a:a + c], y[a:a + c], out=out[a:a + c])
+                    if into:  # the loop, as the stream asks for it (chunks below
+                        # NUMPY_BELOW would otherwise take the one-off NumPy path)
+                        f(coef, z[a:a + c], y[a:a + c], out=out[a:a + c], method="loop")
                     else:
                         out[a:a + c] = f(coef, z[a:a + c], y[a:a + c])
             run()

@@ -99,11 +99,13 @@ def test_jax_matches_plain_numpy_and_compiles_once():
     # compiles once (per dtype) as well
     assert (comp.loop is not None) == (jax.default_backend() == "cpu")
     loop = comp(U, TG, TT)
+    # the compiled loop is shared by the module's tests: count this dtype's compilations
+    n_sig = len(comp.loop.kernel.signatures) if comp.loop is not None else 0
     np.testing.assert_allclose(loop.rate, ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(loop.in_range, ok)
     if comp.loop is not None:
         comp(U * 1.0001, TG, TT)
-        assert len(comp.loop.signatures) == 1
+        assert len(comp.loop.kernel.signatures) == n_sig
         into = np.full(U.size + 2, -1.0)
         back = comp.stream(np.ravel(U), np.ravel(TG), np.ravel(TT), out=into[1:-1])
         assert back.base is into and into[0] == into[-1] == -1.0
@@ -117,6 +119,16 @@ def test_jax_matches_plain_numpy_and_compiles_once():
     assert compensate._cache_size() == n0
     np.testing.assert_allclose(compensate(P, SC, box, U, TG, TT).rate, res.rate, rtol=1e-13)
     assert not np.allclose(res2.rate, res.rate)
+    if comp.loop is not None:  # the loop too: coefficients are its arguments, not constants
+        comp2 = build_compensator(P2, SC, T_range=(-30, 60), W_range=(-80, 80),
+                                  method="halley", iterations=2, host=True)
+        assert comp2.loop.kernel is comp.loop.kernel
+        ref2, ok2 = compensate_numpy(P2, SC, comp2.box, U, TG, TT, method="halley",
+                                     iterations=2)
+        got2 = comp2(U, TG, TT)
+        np.testing.assert_allclose(got2.rate, ref2, rtol=1e-12, atol=1e-12)
+        np.testing.assert_array_equal(got2.in_range, ok2)
+        assert len(comp.loop.kernel.signatures) == n_sig  # new coefficients: no compilation
 
 
 def test_vmap_over_sensors_equals_a_loop():

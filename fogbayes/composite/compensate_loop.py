@@ -9,10 +9,12 @@ Per sample, the same algorithm as the XLA program ``_rate`` (scaled units)::
     w <- Halley / Newton / fixed-point steps, each clipped (a fixed count)
     rate = w W_scale if w is strictly inside the box and |w P(w) - y| is small, else NaN
 
-The coefficients are written into the generated source as constants (as the XLA program
-bakes them in), so the per-sample code is straight-line and the compiler vectorises the
-loop over samples (split over the cores); it reads U, T, t once and writes the rate once, into ``out`` when given.
-Compiled once per compensator (a fit), ~0.3 s.
+The source is generated per *structure* (polynomial degrees, method, iteration count) and
+reads every coefficient from one float64 vector ``q`` into local scalars before the loop, so
+the per-sample code is straight-line and the compiler vectorises the loop over samples
+(split over the cores); it reads U, T, t once and writes the rate once, into ``out``.
+One compilation serves every fit of that structure in the process (a fleet of sensors, a
+loop's candidates): coefficients are arguments, never constants of the program.
 """
 
 from __future__ import annotations
@@ -23,12 +25,24 @@ import numpy as np
 from .model import RESID_ABS, RESID_REL
 
 
-def _horner(coefs, x: str) -> str:
-    """``c0 + x * (c1 + x * (...))`` with the coefficients as literals."""
-    expr = repr(float(coefs[-1]))
-    for c in coefs[-2::-1]:
-        expr = f"({expr} * {x} + {float(c)!r})"
+def _horner(names: list[str], x: str) -> str:
+    """``c0 + x * (c1 + x * (...))`` over the coefficients' variable names."""
+    expr = names[-1]
+    for c in names[-2::-1]:
+        expr = f"({expr} * {x} + {c})"
     return expr
+
+
+class _Names:
+    """Hands out the next slot of ``q``: each coefficient becomes ``q_<i>`` (module doc)."""
+
+    def __init__(self):
+        self.values: list[float] = []
+
+    def __call__(self, values) -> list[str]:
+        start = len(self.values)
+        self.values.extend(float(v) for v in np.ravel(values))
+        return [f"q_{i}" for i in range(start, len(self.values))]
 
 
 def _poly(terms: list[str], w: str) -> str:
@@ -39,21 +53,30 @@ def _poly(terms: list[str], w: str) -> str:
     return expr
 
 
-def source(p, sc, box, *, method: str, iterations: int, recip) -> str:
+def source(p, sc, box, *, method: str, iterations: int, recip) -> tuple[str, np.ndarray]:
+    """(the loop's source, its coefficient vector q). The source depends on the structure
+    only (degrees, method, iterations, whether a reciprocal start is used)."""
     M, c, d = (np.asarray(v, dtype=float) for v in p)
     k = M.shape[1]
-    lo, hi = (repr(float(v)) for v in box)
+    q = _Names()
+    lo, hi = q([box[0], box[1]])
+    T_ref, T_inv, t_inv, U_ref, U_inv, W_scale = q(
+        [sc.T_ref, 1.0 / sc.T_scale, 1.0 / sc.t_scale, sc.U_ref, 1.0 / sc.U_scale, sc.W_scale])
+    cn, dn = q(c), q(d)
+    Mn = [q(M[:, j]) for j in range(k)]
+    rn = None if method == "paper" or recip is None else q(recip)
     S = [f"S{j}" for j in range(k)]
-    L = ["def loop(out, U, T, t):", "    for i in prange(U.shape[0]):",
-         f"        Tp = (T[i] - {float(sc.T_ref)!r}) * {1.0 / sc.T_scale!r}",
-         f"        tp = t[i] * {1.0 / sc.t_scale!r}",
-         (f"        y = (U[i] - {float(sc.U_ref)!r}) * {1.0 / sc.U_scale!r} - "
-          f"{_horner(c, 'Tp')} - tp * {_horner(d, 'Tp')}")]
-    L += [f"        S{j} = {_horner(M[:, j], 'Tp')}" for j in range(k)]
-    if method == "paper" or recip is None:
+    L = ["def loop(out, U, T, t, q):"]
+    L += [f"    q_{i} = q[{i}]" for i in range(len(q.values))]
+    L += ["    for i in prange(U.shape[0]):",
+          f"        Tp = (T[i] - {T_ref}) * {T_inv}",
+          f"        tp = t[i] * {t_inv}",
+          f"        y = (U[i] - {U_ref}) * {U_inv} - {_horner(cn, 'Tp')} - tp * {_horner(dn, 'Tp')}"]
+    L += [f"        S{j} = {_horner(Mn[j], 'Tp')}" for j in range(k)]
+    if rn is None:
         L.append("        w = y / S0")
     else:
-        L.append(f"        w = y * {_horner(recip, 'Tp')}")
+        L.append(f"        w = y * {_horner(rn, 'Tp')}")
     clip = f"        w = min(max(w, {lo}), {hi})"
     if method != "paper":
         L.append(clip)
@@ -73,18 +96,33 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> str:
             L.append("        w = w - 2.0 * g * g1 / (2.0 * g1 * g1 - g * g2)")
         L.append(clip)
     if method == "paper":
-        L.append(f"        out[i] = w * {float(sc.W_scale)!r}")
+        L.append(f"        out[i] = w * {W_scale}")
     else:
         L.append(f"        r = abs(w * {_poly(S, 'w')} - y)")
         L.append(f"        ok = (w > {lo}) and (w < {hi}) and "
                  f"(r <= {RESID_ABS!r} + {RESID_REL!r} * abs(y))")
-        L.append(f"        out[i] = w * {float(sc.W_scale)!r} if ok else np.nan")
+        L.append(f"        out[i] = w * {W_scale} if ok else np.nan")
     L.append("    return out")
-    return "\n".join(L) + "\n"
+    return "\n".join(L) + "\n", np.asarray(q.values, dtype=float)
+
+
+#: Compiled loops by generated source (one per structure; see the module doc).
+_KERNELS: dict[str, object] = {}
 
 
 def compile_loop(p, sc, box, *, method: str, iterations: int, recip):
-    """``loop(out, U, T, t)`` for these coefficients (see the module doc)."""
-    space = {"np": np, "prange": numba.prange}
-    exec(source(p, sc, box, method=method, iterations=iterations, recip=recip), space)  # noqa: S102
-    return numba.njit(nogil=True, parallel=True, error_model="numpy")(space["loop"])
+    """``loop(out, U, T, t)`` for these coefficients (see the module doc); the compiled
+    program is shared by every fit of the same structure."""
+    text, q = source(p, sc, box, method=method, iterations=iterations, recip=recip)
+    kernel = _KERNELS.get(text)
+    if kernel is None:
+        space = {"np": np, "prange": numba.prange}
+        exec(text, space)  # noqa: S102
+        kernel = _KERNELS.setdefault(
+            text, numba.njit(nogil=True, parallel=True, error_model="numpy")(space["loop"]))
+
+    def loop(out, U, T, t):
+        return kernel(out, U, T, t, q)
+
+    loop.kernel = kernel  # the shared compiled program (its ``signatures``: one per dtype)
+    return loop
