@@ -25,21 +25,14 @@ from pathlib import Path
 import numba
 from numba.core import caching
 
+from ._config import fogbayes_cache_dir
+
 __all__ = ["fogbayes_cache_dir", "numba"]
 
 _PACKAGE = Path(__file__).resolve().parent
 
 # Numba renamed its locators (``_UserProvidedCacheLocator`` -> ``UserProvidedCacheLocator``).
 _Base = getattr(caching, "UserProvidedCacheLocator", None) or caching._UserProvidedCacheLocator
-
-
-def fogbayes_cache_dir() -> Path:
-    """The user's cache folder for fogbayes: ``$FOGBAYES_CACHE_DIR``, else
-    ``$XDG_CACHE_HOME/fogbayes``, else ``~/.cache/fogbayes``."""
-    if os.environ.get("FOGBAYES_CACHE_DIR"):
-        return Path(os.environ["FOGBAYES_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "fogbayes"
 
 
 def _is_fogbayes_source(py_file: str) -> bool:

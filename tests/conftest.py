@@ -8,14 +8,24 @@ from __future__ import annotations
 
 import gc
 import json
+import os
+import shutil
 import statistics
+import tempfile
 from pathlib import Path
 
-import jax
+# A new, empty cache folder for this run (fogbayes._config: JAX programs, Numba loops),
+# shared by the xdist workers, the CLI subprocesses and the notebooks (they inherit the
+# environment): a program compiled in one process is read by the others, as on a user's
+# machine after the first run, and nothing compiled by an earlier run is used.
+if "PYTEST_XDIST_WORKER" not in os.environ and "FOGBAYES_CACHE_DIR" not in os.environ:
+    os.environ["FOGBAYES_CACHE_DIR"] = _RUN_CACHE = tempfile.mkdtemp(prefix="fogbayes-test-")
+
+import jax  # noqa: E402  (after the cache is chosen)
 import pytest
 
-import fogbayes  # noqa: F401  (turns on jax_enable_x64)
-from _measured import MEASURED, SHARED, measured_path  # noqa: F401  (re-exported)
+import fogbayes  # noqa: E402, F401  (turns on jax_enable_x64 and the program cache)
+from _measured import MEASURED, SHARED, measured_path  # noqa: E402, F401  (re-exported)
 
 #: Clear JAX's caches once a process holds this many memory maps: half the kernel's
 #: default ``vm.max_map_count`` (65 530), so one module's compilations cannot reach it.
@@ -61,6 +71,12 @@ def pytest_collection_modifyitems(config, items):
     table = json.loads((Path(__file__).with_name("file_seconds.json")).read_text())["seconds"]
     unknown = statistics.median(table.values())  # a new file: a typical one
     items.sort(key=lambda item: -table.get(item.nodeid.split("::", 1)[0], unknown))
+
+
+def pytest_unconfigure(config):
+    """The controller removes the run's cache folder (workers have ended by then)."""
+    if "_RUN_CACHE" in globals() and not hasattr(config, "workerinput"):
+        shutil.rmtree(_RUN_CACHE, ignore_errors=True)
 
 
 @pytest.fixture

@@ -19,9 +19,11 @@ loop's candidates): coefficients are arguments, never constants of the program.
 
 from __future__ import annotations
 
-from .._numba import numba
+from functools import lru_cache
+
 import numpy as np
 
+from .._numba import numba
 from .model import RESID_ABS, RESID_REL
 
 
@@ -106,20 +108,19 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> tuple[str, np.
     return "\n".join(L) + "\n", np.asarray(q.values, dtype=float)
 
 
-#: Compiled loops by generated source (one per structure; see the module doc).
-_KERNELS: dict[str, object] = {}
+@lru_cache(maxsize=64)
+def _compiled(text: str):
+    """The compiled program of one generated source (one per structure; module doc)."""
+    space = {"np": np, "prange": numba.prange}
+    exec(text, space)  # noqa: S102 -- our own generated arithmetic, no input text
+    return numba.njit(nogil=True, parallel=True, error_model="numpy")(space["loop"])
 
 
 def compile_loop(p, sc, box, *, method: str, iterations: int, recip):
     """``loop(out, U, T, t)`` for these coefficients (see the module doc); the compiled
     program is shared by every fit of the same structure."""
     text, q = source(p, sc, box, method=method, iterations=iterations, recip=recip)
-    kernel = _KERNELS.get(text)
-    if kernel is None:
-        space = {"np": np, "prange": numba.prange}
-        exec(text, space)  # noqa: S102
-        kernel = _KERNELS.setdefault(
-            text, numba.njit(nogil=True, parallel=True, error_model="numpy")(space["loop"]))
+    kernel = _compiled(text)
 
     def loop(out, U, T, t):
         return kernel(out, U, T, t, q)

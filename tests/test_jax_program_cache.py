@@ -1,0 +1,87 @@
+"""Compiled JAX programs are kept on disk (fogbayes._config): a fresh process that runs a
+program an earlier process compiled reads it instead of compiling it again.
+
+Each case runs fresh Python processes (the cache is chosen when fogbayes is imported) with
+``FOGBAYES_CACHE_DIR`` pointed at an empty folder, and counts JAX's own cache events.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+# A program whose compilation takes longer than _config.CACHE_MIN_SECONDS (measured ~0.3 s
+# on the 2-core box: a scan over an eigendecomposition), run once; prints JAX's cache events.
+PROGRAM = """
+import collections, json, jax.monitoring
+events = collections.Counter()
+jax.monitoring.register_event_listener(lambda name, **kw: events.update([name]))
+import fogbayes  # noqa: F401  (chooses the cache)
+import jax, jax.numpy as jnp
+
+@jax.jit
+def f(a):
+    def body(c, _):
+        w, v = jnp.linalg.eigh(c @ c.T + jnp.eye(6))
+        return v * jnp.tanh(w)[None, :], w.sum()
+    return jax.lax.scan(body, a, None, length=8)[1].sum()
+
+f(jnp.arange(36.0).reshape(6, 6) / 36).block_until_ready()
+print(json.dumps({"dir": jax.config.jax_compilation_cache_dir,
+                  "hits": events["/jax/compilation_cache/cache_hits"],
+                  "misses": events["/jax/compilation_cache/cache_misses"]}))
+"""
+
+
+def _run(env: dict) -> dict:
+    clean = {k: v for k, v in os.environ.items()
+             if not k.startswith(("JAX_COMPILATION_CACHE", "FOGBAYES_JAX_CACHE"))}
+    out = subprocess.run([sys.executable, "-c", PROGRAM], env={**clean, **env},
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _entries(folder) -> list[str]:
+    return sorted(p.name for p in folder.glob("*-cache"))
+
+
+def test_a_second_process_reads_the_program_the_first_compiled(tmp_path):
+    first = _run({"FOGBAYES_CACHE_DIR": str(tmp_path)})
+    assert first["dir"] == str(tmp_path / "jax")
+    assert first["hits"] == 0 and first["misses"] >= 1
+    written = _entries(tmp_path / "jax")
+    assert any(name.startswith("jit_f-") for name in written)
+    second = _run({"FOGBAYES_CACHE_DIR": str(tmp_path)})
+    assert second["hits"] >= 1 and second["misses"] == 0
+    assert _entries(tmp_path / "jax") == written  # read, not written again
+
+
+@pytest.mark.parametrize("setting", ["off", "0"])
+def test_the_cache_can_be_turned_off(tmp_path, setting):
+    got = _run({"FOGBAYES_CACHE_DIR": str(tmp_path), "FOGBAYES_JAX_CACHE": setting})
+    assert got["dir"] is None and got["hits"] == 0
+    assert not (tmp_path / "jax").exists() or not _entries(tmp_path / "jax")
+
+
+def test_a_folder_the_user_gave_jax_is_kept(tmp_path):
+    mine = tmp_path / "mine"
+    got = _run({"FOGBAYES_CACHE_DIR": str(tmp_path / "fogbayes"),
+                "JAX_COMPILATION_CACHE_DIR": str(mine)})
+    assert got["dir"] == str(mine)
+    assert not (tmp_path / "fogbayes" / "jax").exists()
+
+
+def test_a_child_with_its_own_cache_folder_does_not_inherit_the_parents(tmp_path):
+    # fogbayes hands its folder to JAX through the environment, which children inherit;
+    # a child that names another FOGBAYES_CACHE_DIR (as the cold-cache benchmarks do) must
+    # use that one, not the parent's warm cache.
+    parent = {"JAX_COMPILATION_CACHE_DIR": str(tmp_path / "a" / "jax"),
+              "FOGBAYES_JAX_CACHE_SET": str(tmp_path / "a" / "jax")}
+    got = _run({**parent, "FOGBAYES_CACHE_DIR": str(tmp_path / "b")})
+    assert got["dir"] == str(tmp_path / "b" / "jax")
+    assert _entries(tmp_path / "b" / "jax")
