@@ -10,14 +10,19 @@ run; absolute times are printed too. Rows:
   script that loads the same file and runs allantools ``oadev`` (wall time: import, read,
   compilation, fit), with the compilation cache warm and empty;
 * ``fogbayes fit REC -m thermal --json`` on the 6.3 h, 10 Hz chamber test (fresh process);
-* ``fogbayes --help`` (fresh process; no JAX import).
+* ``fogbayes --help`` (fresh process; no JAX import);
+* ``fogbayes loop`` on the README's 1 h demo record (fresh processes): with an empty cache
+  folder, again with the programs the first run kept (JAX and Numba), and with the JAX
+  program cache off (``FOGBAYES_JAX_CACHE=off``; the Numba loops still cached), as before
+  JAX's programs were kept.
 
-Run: ``python benchmarks/bench_public.py [--repeat 3] [--quick]``.
+Run: ``python benchmarks/bench_public.py [--repeat 3] [--quick] [--only functions|cli|loop]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -99,15 +104,52 @@ def bench_cli(repeat: int, quick: bool) -> None:
         print(f"| fogbayes --help | {helps:.2f} | | |")
 
 
+def bench_loop_cli() -> None:
+    """``fogbayes loop`` end to end: empty cache, warm cache, JAX program cache off."""
+    import os
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        base = {k: v for k, v in os.environ.items()
+                if not k.startswith(("JAX_COMPILATION_CACHE", "FOGBAYES_JAX_CACHE"))}
+        env = {**base, "FOGBAYES_CACHE_DIR": str(tmp / "cache")}
+        exe = [sys.executable, "-m", "fogbayes", "-q"]
+        subprocess.run(exe + ["demo", "--out", str(tmp / "demo"), "--duration", "3600",
+                              "--fs", "1"], check=True, capture_output=True, env=env)
+        cmd = exe + ["loop", str(tmp / "demo" / "demo_recording.csv"), "--model", "bias-t",
+                     "--json", str(tmp / "loop.json"), "--compensated", str(tmp / "loop.csv")]
+        shutil.rmtree(tmp / "cache")  # the demo's own programs do not count
+
+        def once(extra: dict) -> float:
+            t0 = time.perf_counter()
+            subprocess.run(cmd, check=True, capture_output=True, env={**env, **extra})
+            return time.perf_counter() - t0
+
+        cold = once({})
+        warm = once({})
+        off = once({"FOGBAYES_JAX_CACHE": "off"})
+        print("| fogbayes loop, 1 h demo record (fresh process) | seconds | / empty cache |")
+        print("| --- | --- | --- |")
+        print(f"| empty cache folder | {cold:.1f} | 1.00 |")
+        print(f"| programs kept by the run above | {warm:.1f} | {warm / cold:.2f} |")
+        print(f"| JAX program cache off (Numba loops cached) | {off:.1f} | {off / cold:.2f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
+    ap.add_argument("--only", choices=("functions", "cli", "loop"), help="one group of rows")
     args = ap.parse_args()
     t0 = time.time()
-    bench_functions(args.repeat, (1 << 14,) if args.quick else (1 << 20, 10_000_000))
-    print()
-    bench_cli(args.repeat, args.quick)
+    if args.only in (None, "functions"):
+        bench_functions(args.repeat, (1 << 14,) if args.quick else (1 << 20, 10_000_000))
+        print()
+    if args.only in (None, "cli"):
+        bench_cli(args.repeat, args.quick)
+        print()
+    if args.only in (None, "loop"):
+        bench_loop_cli()
     print(f"\n({time.time() - t0:.0f} s in all)")
 
 

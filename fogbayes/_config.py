@@ -14,15 +14,26 @@ workers need).
 
 Compiled programs are kept on disk (JAX's persistent compilation cache), so a second
 ``fogbayes loop`` on a record of the same size does not compile again: on the README's 1 h
-record, 43.9 s the first time and 34.7 s the next (39 programs, 0.7 MB). They live under
-:func:`fogbayes_cache_dir` ``/jax`` (beside the Numba loops' ``/numba``), capped at
+record, 42-47 s the first time and 31-34 s the next (40 programs, 0.7 MB). They live under
+:func:`fogbayes_cache_dir` ``/jax/<host>`` (beside the Numba loops' ``/numba``), one folder
+per CPU (:func:`host_tag`: machine code built for one CPU's features can stop another with
+SIGILL, and a home folder may be shared by several machines), capped at
 :data:`CACHE_MAX_BYTES`, least recently used first out; programs that compiled in under
-:data:`CACHE_MIN_SECONDS` are not worth a file. ``FOGBAYES_JAX_CACHE=off`` turns it off; a
-folder the user set for JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left as it is; an
-unwritable folder turns it off rather than warn at every compilation.
+:data:`CACHE_MIN_SECONDS` are not worth a file.
+
+With jax 0.9.2 the XLA:CPU loader logs two false "could lead to execution errors such as
+SIGILL" lines for every program it loads (jax-ml/jax#38445: two tuning flags checked as CPU
+features), so the cache is turned on only where fogbayes can silence XLA's C++ log
+(``TF_CPP_MIN_LOG_LEVEL=3``, read when JAX is first imported): fogbayes is imported before
+JAX, or that level was already set. ``FOGBAYES_JAX_CACHE=off`` turns the cache off; so does
+a ``TF_CPP_MIN_LOG_LEVEL`` below 3 set by the user (who wants XLA's log). A folder the user
+set for JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left as it is; an unwritable folder
+turns the cache off rather than warn at every compilation.
 """
 
+import hashlib
 import os
+import platform
 import sys
 from pathlib import Path
 
@@ -30,6 +41,11 @@ from pathlib import Path
 CACHE_MAX_BYTES = 1 << 30
 #: programs compiled faster than this are not written (reading a file costs ~1 ms)
 CACHE_MIN_SECONDS = 0.1
+#: XLA's C++ log level that hides the loader's false warnings (3: fatal messages only)
+QUIET_LOG_LEVEL = 3
+#: environment variable naming the folder fogbayes itself gave JAX (children inherit JAX's
+#: variable; this tells it apart from one the user set)
+_OURS = "FOGBAYES_JAX_CACHE_SET"
 
 
 def fogbayes_cache_dir() -> Path:
@@ -41,11 +57,23 @@ def fogbayes_cache_dir() -> Path:
     return Path(base) / "fogbayes"
 
 
+def host_tag() -> str:
+    """12 hex digits naming this CPU: its architecture and, on Linux, its feature flags."""
+    flags = ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            flags = next((line for line in f if line.startswith(("flags", "Features"))), "")
+    except OSError:
+        pass
+    text = f"{platform.machine()}|{platform.processor()}|{' '.join(sorted(flags.split()))}"
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
 def jax_cache_dir() -> str | None:
     """Where compiled JAX programs are kept, or None (turned off, or not writable)."""
     if os.environ.get("FOGBAYES_JAX_CACHE", "").lower() in ("off", "0", "false", "no"):
         return None
-    path = fogbayes_cache_dir() / "jax"
+    path = fogbayes_cache_dir() / "jax" / host_tag()
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError:
@@ -53,20 +81,24 @@ def jax_cache_dir() -> str | None:
     return str(path) if os.access(path, os.W_OK) else None
 
 
-#: environment variable naming the folder fogbayes itself gave JAX (children inherit JAX's
-#: variable; this tells it apart from one the user set)
-_OURS = "FOGBAYES_JAX_CACHE_SET"
+def _can_silence_xla() -> bool:
+    """XLA's C++ log can be kept to fatal messages: the level is set already, or JAX is not
+    imported yet and the user did not choose a level."""
+    level = os.environ.get("TF_CPP_MIN_LOG_LEVEL")
+    if level is None:
+        return "jax" not in sys.modules
+    return level.strip().isdigit() and int(level) >= QUIET_LOG_LEVEL
 
 
 def _settings() -> dict[str, object]:
     """JAX options fogbayes sets: float64 always; the compilation cache unless the user
-    configured JAX's own (then left as it is) or turned ours off."""
+    configured JAX's own (then left as it is), turned ours off or wants XLA's log."""
     out: dict[str, object] = {"jax_enable_x64": True}
     given = os.environ.get("JAX_COMPILATION_CACHE_DIR")
     if given is not None and given != os.environ.get(_OURS):
         return out
-    path = jax_cache_dir()  # this process's choice, not one inherited from a parent
-    out["jax_compilation_cache_dir"] = path
+    path = jax_cache_dir() if _can_silence_xla() else None
+    out["jax_compilation_cache_dir"] = path  # this process's choice, not its parent's
     if path is not None:
         out["jax_persistent_cache_min_compile_time_secs"] = CACHE_MIN_SECONDS
         try:  # JAX keeps the cache under a size limit only with file locks
@@ -86,9 +118,10 @@ def _apply(settings: dict[str, object]) -> None:
             os.environ.pop(name.upper(), None)
         else:
             os.environ[name.upper()] = "true" if value is True else str(value)
-    if settings.get("jax_compilation_cache_dir"):
-        os.environ[_OURS] = os.environ["JAX_COMPILATION_CACHE_DIR"] = str(
-            settings["jax_compilation_cache_dir"])
+    path = settings.get("jax_compilation_cache_dir")
+    if path:
+        os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", str(QUIET_LOG_LEVEL))
+        os.environ[_OURS] = os.environ["JAX_COMPILATION_CACHE_DIR"] = str(path)
     elif "jax_compilation_cache_dir" in settings:
         os.environ.pop(_OURS, None)
         os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)

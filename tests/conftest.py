@@ -21,10 +21,9 @@ from pathlib import Path
 if "PYTEST_XDIST_WORKER" not in os.environ and "FOGBAYES_CACHE_DIR" not in os.environ:
     os.environ["FOGBAYES_CACHE_DIR"] = _RUN_CACHE = tempfile.mkdtemp(prefix="fogbayes-test-")
 
-import jax  # noqa: E402  (after the cache is chosen)
-import pytest
-
-import fogbayes  # noqa: E402, F401  (turns on jax_enable_x64 and the program cache)
+import fogbayes  # noqa: E402, F401  (float64 and the program cache; before JAX: _config)
+import jax  # noqa: E402
+import pytest  # noqa: E402
 from _measured import MEASURED, SHARED, measured_path  # noqa: E402, F401  (re-exported)
 
 #: Clear JAX's caches once a process holds this many memory maps: half the kernel's
