@@ -27,8 +27,9 @@ features), so the cache is turned on only where fogbayes can silence XLA's C++ l
 (``TF_CPP_MIN_LOG_LEVEL=3``, read when JAX is first imported): fogbayes is imported before
 JAX, or that level was already set. ``FOGBAYES_JAX_CACHE=off`` turns the cache off; so does
 a ``TF_CPP_MIN_LOG_LEVEL`` below 3 set by the user (who wants XLA's log). A folder the user
-set for JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left as it is; an unwritable folder
-turns the cache off rather than warn at every compilation.
+set for JAX itself (``JAX_COMPILATION_CACHE_DIR``, or ``jax.config.update`` before fogbayes
+is imported) is left as it is; an unwritable folder turns the cache off rather than warn at
+every compilation.
 """
 
 import os
@@ -93,12 +94,24 @@ def _can_silence_xla() -> bool:
     return level.strip().isdigit() and int(level) >= QUIET_LOG_LEVEL
 
 
+def _user_chose_jax_folder() -> bool:
+    """JAX's cache folder was set by the user: by ``JAX_COMPILATION_CACHE_DIR``, or by
+    ``jax.config.update("jax_compilation_cache_dir", ...)`` before fogbayes was imported
+    (a folder fogbayes itself chose, named in :data:`_OURS`, does not count)."""
+    ours = os.environ.get(_OURS)
+    given = os.environ.get("JAX_COMPILATION_CACHE_DIR")
+    if given is not None and given != ours:
+        return True
+    jax = sys.modules.get("jax")
+    current = getattr(getattr(jax, "config", None), "jax_compilation_cache_dir", None)
+    return current is not None and current != ours
+
+
 def _settings() -> dict[str, object]:
     """JAX options fogbayes sets: float64 always; the compilation cache unless the user
     configured JAX's own (then left as it is), turned ours off or wants XLA's log."""
     out: dict[str, object] = {"jax_enable_x64": True}
-    given = os.environ.get("JAX_COMPILATION_CACHE_DIR")
-    if given is not None and given != os.environ.get(_OURS):
+    if _user_chose_jax_folder():
         return out
     path = jax_cache_dir() if _can_silence_xla() else None
     out["jax_compilation_cache_dir"] = path  # this process's choice, not its parent's

@@ -39,12 +39,12 @@ print(json.dumps({"dir": jax.config.jax_compilation_cache_dir,
 """
 
 
-def _run(env: dict, *, jax_first: bool = False) -> dict:
-    """PROGRAM in a fresh process (``jax_first``: JAX imported before fogbayes); its JSON
-    line, plus its stderr under "stderr"."""
+def _run(env: dict, *, jax_first: bool = False, prelude: str = "") -> dict:
+    """PROGRAM in a fresh process (``jax_first``: JAX imported before fogbayes; ``prelude``:
+    code run before fogbayes is imported); its JSON line, plus its stderr under "stderr"."""
     clean = {k: v for k, v in os.environ.items()
              if not k.startswith(("JAX_COMPILATION_CACHE", "FOGBAYES_JAX_CACHE", "TF_CPP_"))}
-    code = ("import jax\n" if jax_first else "") + PROGRAM
+    code = ("import jax\n" if jax_first else "") + prelude + PROGRAM
     out = subprocess.run([sys.executable, "-c", code], env={**clean, **env},
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
@@ -96,6 +96,18 @@ def test_a_folder_the_user_gave_jax_is_kept(tmp_path):
     assert got["dir"] == str(mine)
     assert not (tmp_path / "fogbayes" / "jax").exists()
     assert got["hits"] == 0
+
+
+def test_a_folder_the_user_gave_jax_in_the_process_is_kept(tmp_path):
+    # jax.config.update before fogbayes is imported: fogbayes must not replace the folder
+    # (with its own, or with None because JAX was imported first)
+    mine = tmp_path / "mine"
+    for level in ({}, {"TF_CPP_MIN_LOG_LEVEL": "3"}):
+        got = _run({"FOGBAYES_CACHE_DIR": str(tmp_path / "fogbayes"), **level},
+                   jax_first=True,
+                   prelude=f"jax.config.update('jax_compilation_cache_dir', {str(mine)!r})\n")
+        assert got["dir"] == str(mine)
+    assert not (tmp_path / "fogbayes" / "jax").exists()
 
 
 def test_a_child_with_its_own_cache_folder_does_not_inherit_the_parents(tmp_path):
