@@ -1,8 +1,8 @@
 r"""Compiled per-sensor loops of the vectorised fit (Numba, CPU; sensors on all cores).
 
-Each kernel does for every sensor ``s`` (``prange``) what the per-recording workflow does
-with NumPy, in one pass over that sensor's samples, never building the (sensors, samples,
-terms) design array that a batched XLA program has to stream through memory:
+Each kernel does for every sensor ``s`` what the per-recording workflow does with NumPy,
+in one pass over that sensor's samples, never building the (sensors, samples, terms)
+design array that a batched XLA program has to stream through memory:
 
 * :func:`fit_gram` -- weighted least squares by the normal equations in the sensor's own
   scaled basis (:func:`fogbayes.inference.lsq.lstsq_gram`'s equations)::
@@ -28,18 +28,43 @@ covariate-major, z (S, c, n): each covariate of a sensor is one contiguous row, 
 per-sensor min/max and the block means read them. ``cache=True``: the machine code is
 stored in the user's cache folder (:mod:`fogbayes._numba`), so only a first process pays
 the compilation.
+
+Sensors run on all cores as contiguous ranges, one per thread (:func:`_over_sensors`: Python
+threads calling a ``nogil`` loop ``_*_range(s0, s1, ...)``), not as Numba ``prange`` loops:
+the same arithmetic and speed, but Numba's parallel passes made the first compilation
+~3x longer (all six kernels with an empty cache: 29 s as ``prange`` loops, 10 s as range
+loops; ``fit_gram`` 14 s -> 6 s; measured on the 2-core box). The thread count is Numba's
+(``NUMBA_NUM_THREADS``). ``error_model="numpy"``: a division by zero (a rank-deficient
+sensor's Cholesky) gives inf/NaN and ``ok`` False, as it did inside ``prange``, instead of
+raising.
 """
 
 from __future__ import annotations
 
-from .._numba import numba
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
-from numba import prange
+
+from .._numba import numba
 
 CHUNK = 256  # rows of the design built at a time: (p, CHUNK) stays in L1
 
 
-@numba.njit(cache=True, inline="always")
+def _over_sensors(kernel, S: int, *args) -> None:
+    """``kernel(s0, s1, *args)`` over contiguous ranges of the S sensors, one per thread
+    (``kernel`` is ``nogil``: the threads run at once); errors are raised here."""
+    n = max(1, min(numba.get_num_threads(), S))
+    if n == 1:
+        kernel(0, S, *args)
+        return
+    edges = np.linspace(0, S, n + 1).astype(np.int64)
+    with ThreadPoolExecutor(n) as pool:
+        jobs = [pool.submit(kernel, int(edges[k]), int(edges[k + 1]), *args) for k in range(n)]
+        for job in jobs:
+            job.result()
+
+
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _monomials(z, s, i0, n, centre, scale, lo, hi, exps, X, u):
     """Monomials of rows i0:i0+n of sensor s into X[:, :n]: each covariate clamped to
     [lo_sj, hi_sj], scaled (z - centre) / scale into u, raised by repeated products."""
@@ -57,7 +82,7 @@ def _monomials(z, s, i0, n, centre, scale, lo, hi, exps, X, u):
                     X[k, r] *= u[r]
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy):
     """Rows i0:i0+n of sensor s: monomials into X[:, :n] and (weight, y) into wy[:2, :n]
     (wy[2] is scratch); weight-0 rows (values may be NaN) become zeros: they add nothing."""
@@ -75,7 +100,108 @@ def _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy):
             wy[1, r] = y[s, i0 + r]
 
 
-@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def _fit_one(z, y, w, centre, scale, n_valid, exps, rcond, lo, hi, s, coef, cov, rss, s2, dof, ok):
+    """:func:`fit_gram` of sensor ``s``, written into row ``s`` of its outputs.
+
+    Products and stores are element by element: ``@`` and slice stores (``coef[s] = beta``)
+    would compile BLAS calls and Numba's shape-mismatch message (~9 s more on first use)."""
+    m = y.shape[1]
+    p = exps.shape[0]
+    X = np.empty((p, CHUNK))
+    wy = np.empty((3, CHUNK))
+    wx = np.empty(CHUNK)
+    G = np.zeros((p, p))
+    g = np.zeros(p)
+    for i0 in range(0, m, CHUNK):
+        n = min(CHUNK, m - i0)
+        _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy)
+        for a in range(p):
+            acc = 0.0
+            for r in range(n):
+                wx[r] = wy[0, r] * X[a, r]
+                acc += wx[r] * wy[1, r]
+            g[a] += acc
+            for b in range(a + 1):
+                acc = 0.0
+                for r in range(n):
+                    acc += wx[r] * X[b, r]
+                G[a, b] += acc
+    L = np.zeros((p, p))  # Cholesky, lower
+    good = True
+    for a in range(p):
+        for b in range(a + 1):
+            acc = G[a, b]
+            for k in range(b):
+                acc -= L[a, k] * L[b, k]
+            if a == b:
+                if not acc > 0.0:
+                    good = False
+                    acc = 0.0
+                L[a, a] = np.sqrt(acc)
+            else:
+                L[a, b] = acc / L[b, b] if L[b, b] > 0.0 else np.nan
+    dmin, dmax = np.inf, 0.0
+    for a in range(p):
+        dmin = min(dmin, abs(L[a, a]))
+        dmax = max(dmax, abs(L[a, a]))
+    Linv = np.zeros((p, p))  # inverse of L by forward substitution
+    for col in range(p):
+        Linv[col, col] = 1.0 / L[col, col]
+        for a in range(col + 1, p):
+            acc = 0.0
+            for k in range(col, a):
+                acc -= L[a, k] * Linv[k, col]
+            Linv[a, col] = acc / L[a, a]
+    Ginv = np.zeros((p, p))  # Linv^T Linv
+    for a in range(p):
+        for b in range(p):
+            acc = 0.0
+            for k in range(max(a, b), p):
+                acc += Linv[k, a] * Linv[k, b]
+            Ginv[a, b] = acc
+    beta = np.zeros(p)  # Ginv g
+    for a in range(p):
+        acc = 0.0
+        for b in range(p):
+            acc += Ginv[a, b] * g[b]
+        beta[a] = acc
+    wrss = 0.0
+    ss = 0.0
+    for i0 in range(0, m, CHUNK):
+        n = min(CHUNK, m - i0)
+        _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy)
+        for r in range(n):
+            wx[r] = wy[1, r]
+        for a in range(p):
+            for r in range(n):
+                wx[r] -= X[a, r] * beta[a]
+        for r in range(n):
+            wrss += wy[0, r] * wx[r] * wx[r]
+            ss += wx[r] * wx[r]  # weight-0 rows have y = X = 0 here: they add 0
+    d = n_valid[s] - p
+    var = wrss / max(d, 1.0)
+    rss[s] = ss
+    for a in range(p):
+        coef[s, a] = beta[a]
+        for b in range(p):
+            cov[s, a, b] = var * Ginv[a, b]
+    s2[s] = var
+    dof[s] = d
+    finite = True
+    for a in range(p):
+        finite = finite and np.isfinite(beta[a])
+    ok[s] = good and dmin > rcond * dmax and d > 0 and finite
+
+
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _fit_range(s0, s1, z, y, w, centre, scale, n_valid, exps, rcond, lo, hi,
+               coef, cov, rss, s2, dof, ok):
+    for s in range(s0, s1):
+        _fit_one(z, y, w, centre, scale, n_valid, exps, rcond, lo, hi, s,
+                 coef, cov, rss, s2, dof, ok)
+
+
 def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
     """Weighted LSQ of every sensor. z (S, c, m), y, w (S, m), centre/scale (S, c),
     n_valid (S,) rows that count for the dof, exps (p, c) int. Rows of weight 0 are skipped
@@ -94,82 +220,12 @@ def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
     s2 = np.zeros(S)
     dof = np.zeros(S)
     ok = np.zeros(S, np.bool_)
-    for s in prange(S):
-        X = np.empty((p, CHUNK))
-        wy = np.empty((3, CHUNK))
-        wx = np.empty(CHUNK)
-        G = np.zeros((p, p))
-        g = np.zeros(p)
-        for i0 in range(0, m, CHUNK):
-            n = min(CHUNK, m - i0)
-            _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy)
-            for a in range(p):
-                acc = 0.0
-                for r in range(n):
-                    wx[r] = wy[0, r] * X[a, r]
-                    acc += wx[r] * wy[1, r]
-                g[a] += acc
-                for b in range(a + 1):
-                    acc = 0.0
-                    for r in range(n):
-                        acc += wx[r] * X[b, r]
-                    G[a, b] += acc
-        L = np.zeros((p, p))  # Cholesky, lower
-        good = True
-        for a in range(p):
-            for b in range(a + 1):
-                acc = G[a, b]
-                for k in range(b):
-                    acc -= L[a, k] * L[b, k]
-                if a == b:
-                    if not acc > 0.0:
-                        good = False
-                        acc = 0.0
-                    L[a, a] = np.sqrt(acc)
-                else:
-                    L[a, b] = acc / L[b, b] if L[b, b] > 0.0 else np.nan
-        dmin, dmax = np.inf, 0.0
-        for a in range(p):
-            dmin = min(dmin, abs(L[a, a]))
-            dmax = max(dmax, abs(L[a, a]))
-        Linv = np.zeros((p, p))  # inverse of L by forward substitution
-        for col in range(p):
-            Linv[col, col] = 1.0 / L[col, col]
-            for a in range(col + 1, p):
-                acc = 0.0
-                for k in range(col, a):
-                    acc -= L[a, k] * Linv[k, col]
-                Linv[a, col] = acc / L[a, a]
-        Ginv = Linv.T @ Linv
-        beta = Ginv @ g
-        wrss = 0.0
-        ss = 0.0
-        for i0 in range(0, m, CHUNK):
-            n = min(CHUNK, m - i0)
-            _design_chunk(z, w, y, s, i0, n, centre, scale, lo, hi, exps, X, wy)
-            for r in range(n):
-                wx[r] = wy[1, r]
-            for a in range(p):
-                for r in range(n):
-                    wx[r] -= X[a, r] * beta[a]
-            for r in range(n):
-                wrss += wy[0, r] * wx[r] * wx[r]
-                ss += wx[r] * wx[r]  # weight-0 rows have y = X = 0 here: they add 0
-        d = n_valid[s] - p
-        var = wrss / max(d, 1.0)
-        coef[s] = beta
-        rss[s] = ss
-        cov[s] = var * Ginv
-        s2[s] = var
-        dof[s] = d
-        finite = True
-        for a in range(p):
-            finite = finite and np.isfinite(beta[a])
-        ok[s] = good and dmin > rcond * dmax and d > 0 and finite
+    _over_sensors(_fit_range, S, z, y, w, centre, scale, n_valid, exps, float(rcond), lo, hi,
+                  coef, cov, rss, s2, dof, ok)
     return coef, cov, rss, s2, dof, ok
 
 
-@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+@numba.njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
 def _bias_row(coef, z, s, centre, scale, lo, hi, exps, out):
     """x(clip(z_si, lo_s, hi_s)) . b_s for every sample i of sensor s, into out (n,)."""
     n, p = z.shape[2], exps.shape[0]
@@ -187,18 +243,22 @@ def _bias_row(coef, z, s, centre, scale, lo, hi, exps, out):
             out[i0 + r] = u[r]
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _evaluate_range(s0, s1, coef, z, centre, scale, exps, lo, hi, out):
+    for s in range(s0, s1):
+        _bias_row(coef, z, s, centre, scale, lo, hi, exps, out[s])
+
+
 def evaluate(coef, z, centre, scale, exps, lo, hi):
     """x(clip(z_si, lo_s, hi_s)) . b_s for every sensor s and sample i: coef (S, p),
     z (S, c, n), lo/hi (S, c) (pass -inf/inf not to clamp) -> (S, n)."""
     S, n = z.shape[0], z.shape[2]
     out = np.empty((S, n))
-    for s in prange(S):
-        _bias_row(coef, z, s, centre, scale, lo, hi, exps, out[s])
+    _over_sensors(_evaluate_range, S, coef, z, centre, scale, exps, lo, hi, out)
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _pauta_row(r, mask, n_sigma, max_iter):
     """``pauta_flags`` of one row r (n,): flags into mask (n,); (count, threshold, passes)."""
     n = r.size
@@ -232,7 +292,12 @@ def _pauta_row(r, mask, n_sigma, max_iter):
     return flagged, thr, passes
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _pauta_range(s0, s1, r, n_sigma, max_iter, mask, count, threshold, passes):
+    for s in range(s0, s1):
+        count[s], threshold[s], passes[s] = _pauta_row(r[s], mask[s], n_sigma, max_iter)
+
+
 def pauta(r, n_sigma, max_iter):
     """Iterated n-sigma flags of each row of r (S, n): mask (S, n), count (S,),
     threshold (S,), passes (S,) -- ``pauta_flags(r[s], n_sigma=..., max_iter=...)``."""
@@ -241,12 +306,23 @@ def pauta(r, n_sigma, max_iter):
     count = np.zeros(S, np.int64)
     threshold = np.full(S, np.inf)
     passes = np.zeros(S, np.int64)
-    for s in prange(S):
-        count[s], threshold[s], passes[s] = _pauta_row(r[s], mask[s], n_sigma, max_iter)
+    _over_sensors(_pauta_range, S, r, float(n_sigma), int(max_iter), mask, count, threshold,
+                  passes)
     return mask, count, threshold, passes
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _residual_pauta_range(s0, s1, y, coef, z, centre, scale, exps, n_sigma, max_iter, lo, hi,
+                          mask, count):
+    n = y.shape[1]
+    r = np.empty(n)
+    for s in range(s0, s1):
+        _bias_row(coef, z, s, centre, scale, lo, hi, exps, r)
+        for i in range(n):
+            r[i] = y[s, i] - r[i]
+        count[s] = _pauta_row(r, mask[s], n_sigma, max_iter)[0]
+
+
 def residual_pauta(y, coef, z, centre, scale, exps, n_sigma, max_iter):
     """:func:`pauta` of the residuals ``y - x(z) . b`` of every sensor (y (S, n)), each
     formed in a per-thread buffer: mask (S, n) and count (S,)."""
@@ -255,31 +331,16 @@ def residual_pauta(y, coef, z, centre, scale, exps, n_sigma, max_iter):
     hi = np.full(centre.shape, np.inf)
     mask = np.zeros((S, n), np.bool_)
     count = np.zeros(S, np.int64)
-    for s in prange(S):
-        r = np.empty(n)
-        _bias_row(coef, z, s, centre, scale, lo, hi, exps, r)
-        for i in range(n):
-            r[i] = y[s, i] - r[i]
-        count[s] = _pauta_row(r, mask[s], n_sigma, max_iter)[0]
+    _over_sensors(_residual_pauta_range, S, y, coef, z, centre, scale, exps, float(n_sigma),
+                  int(max_iter), lo, hi, mask, count)
     return mask, count
 
 
-@numba.njit(cache=True, parallel=True)
-def masked_block_means(t, y, z, use, start, stop):
-    """Per sensor and block [start_j, stop_j) of the shared time stamps t (n,): mean time of
-    the used samples (of all of them where none is used), mean of y (S, n) and of each
-    covariate of z (S, c, n) over the used samples (NaN where none is), and their count.
-
-    Returns tm (S, m), y (S, m), z (S, c, m), count (S, m) -- ``fit_blocks``' fields.
-    """
-    S, c = z.shape[0], z.shape[1]
-    nb = start.size
-    tm = np.empty((S, nb))
-    ym = np.empty((S, nb))
-    zm = np.empty((S, c, nb))
-    cnt = np.zeros((S, nb), np.int64)
-    for s in prange(S):
-        acc = np.empty(c)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _block_means_range(s0, s1, t, y, z, use, start, stop, tm, ym, zm, cnt):
+    c, nb = z.shape[1], start.size
+    acc = np.empty(c)
+    for s in range(s0, s1):
         for j in range(nb):
             a, b = start[j], stop[j]
             t0 = t[a]
@@ -287,7 +348,8 @@ def masked_block_means(t, y, z, use, start, stop):
             dt_used = 0.0
             dt_all = 0.0
             ysum = 0.0
-            acc[:] = 0.0
+            for q in range(c):
+                acc[q] = 0.0
             for i in range(a, b):
                 rel = t[i] - t0  # offsets from the block's first stamp: no Unix-time rounding
                 dt_all += rel
@@ -302,28 +364,33 @@ def masked_block_means(t, y, z, use, start, stop):
             ym[s, j] = ysum / k if k > 0 else np.nan
             for q in range(c):
                 zm[s, q, j] = acc[q] / k if k > 0 else np.nan
+
+
+def masked_block_means(t, y, z, use, start, stop):
+    """Per sensor and block [start_j, stop_j) of the shared time stamps t (n,): mean time of
+    the used samples (of all of them where none is used), mean of y (S, n) and of each
+    covariate of z (S, c, n) over the used samples (NaN where none is), and their count.
+
+    Returns tm (S, m), y (S, m), z (S, c, m), count (S, m) -- ``fit_blocks``' fields.
+    """
+    S, c = z.shape[0], z.shape[1]
+    nb = start.size
+    tm = np.empty((S, nb))
+    ym = np.empty((S, nb))
+    zm = np.empty((S, c, nb))
+    cnt = np.zeros((S, nb), np.int64)
+    _over_sensors(_block_means_range, S, t, y, z, use, start, stop, tm, ym, zm, cnt)
     return tm, ym, zm, cnt
 
 
-@numba.njit(cache=True, parallel=True, fastmath={"reassoc", "contract"})
-def stability(before, after, a, b, start, stop, offsets):
-    """Bias and bias stability of every row of ``before`` and ``after`` (S, n) on samples
-    [a, b) (paper 004 eqs. 12-13): ``B0 = mean(x[a:b])`` and, per window w,
-    ``Bs_w = std_{n-1}`` of the means of the blocks ``[a + start_j, a + stop_j)`` for j in
-    ``offsets[w]:offsets[w + 1]``.
-
-    Returns B0 (2, S) and Bs (2, S, W) (index 0: before, 1: after; NaN for a window of
-    fewer than two blocks).
-    """
-    S = before.shape[0]
+@numba.njit(cache=True, error_model="numpy", nogil=True, fastmath={"reassoc", "contract"})
+def _stability_range(s0, s1, before, after, a, b, start, stop, offsets, b0, bs):
     W = offsets.size - 1
-    b0 = np.empty((2, S))
-    bs = np.full((2, S, W), np.nan)
     most = 0
     for w in range(W):
         most = max(most, offsets[w + 1] - offsets[w])
-    for s in prange(S):
-        means = np.empty(most)
+    means = np.empty(most)
+    for s in range(s0, s1):
         for q in range(2):
             x = before if q == 0 else after
             tot = 0.0
@@ -352,16 +419,30 @@ def stability(before, after, a, b, start, stop, offsets):
                 for j in range(k):
                     ss += (means[j] - m) ** 2
                 bs[q, s, w] = np.sqrt(ss / (k - 1))
+
+
+def stability(before, after, a, b, start, stop, offsets):
+    """Bias and bias stability of every row of ``before`` and ``after`` (S, n) on samples
+    [a, b) (paper 004 eqs. 12-13): ``B0 = mean(x[a:b])`` and, per window w,
+    ``Bs_w = std_{n-1}`` of the means of the blocks ``[a + start_j, a + stop_j)`` for j in
+    ``offsets[w]:offsets[w + 1]``.
+
+    Returns B0 (2, S) and Bs (2, S, W) (index 0: before, 1: after; NaN for a window of
+    fewer than two blocks).
+    """
+    S = before.shape[0]
+    W = offsets.size - 1
+    b0 = np.empty((2, S))
+    bs = np.full((2, S, W), np.nan)
+    _over_sensors(_stability_range, S, before, after, int(a), int(b), start, stop, offsets,
+                  b0, bs)
     return b0, bs
 
 
-@numba.njit(cache=True, parallel=True)
-def covariate_range(z, w):
-    """Min and max of each covariate of z (S, c, m) over the rows with w (S, m) > 0."""
-    S, c, m = z.shape
-    lo = np.full((S, c), np.inf)
-    hi = np.full((S, c), -np.inf)
-    for s in prange(S):
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _range_range(s0, s1, z, w, lo, hi):
+    c, m = z.shape[1], z.shape[2]
+    for s in range(s0, s1):
         for j in range(c):
             a, b = np.inf, -np.inf
             for i in range(m):
@@ -370,4 +451,12 @@ def covariate_range(z, w):
                     a = min(a, v)
                     b = max(b, v)
             lo[s, j], hi[s, j] = a, b
+
+
+def covariate_range(z, w):
+    """Min and max of each covariate of z (S, c, m) over the rows with w (S, m) > 0."""
+    S, c = z.shape[0], z.shape[1]
+    lo = np.full((S, c), np.inf)
+    hi = np.full((S, c), -np.inf)
+    _over_sensors(_range_range, S, z, w, lo, hi)
     return lo, hi
