@@ -29,7 +29,7 @@ per-sensor min/max and the block means read them. ``cache=True``: the machine co
 stored in the user's cache folder (:mod:`fogbayes._numba`), so only a first process pays
 the compilation.
 
-Sensors run on all cores as contiguous ranges, one per thread (:func:`_over_sensors`: Python
+Sensors run on all cores as contiguous ranges, one per thread (:func:`fogbayes._numba.over_rows`: Python
 threads calling a ``nogil`` loop ``_*_range(s0, s1, ...)``), not as Numba ``prange`` loops:
 the same arithmetic and speed, but Numba's parallel passes made the first compilation
 ~3x longer (all six kernels with an empty cache: 29 s as ``prange`` loops, 10 s as range
@@ -41,27 +41,11 @@ raising.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 
-from .._numba import numba
+from .._numba import numba, over_rows
 
 CHUNK = 256  # rows of the design built at a time: (p, CHUNK) stays in L1
-
-
-def _over_sensors(kernel, S: int, *args) -> None:
-    """``kernel(s0, s1, *args)`` over contiguous ranges of the S sensors, one per thread
-    (``kernel`` is ``nogil``: the threads run at once); errors are raised here."""
-    n = max(1, min(numba.get_num_threads(), S))
-    if n == 1:
-        kernel(0, S, *args)
-        return
-    edges = np.linspace(0, S, n + 1).astype(np.int64)
-    with ThreadPoolExecutor(n) as pool:
-        jobs = [pool.submit(kernel, int(edges[k]), int(edges[k + 1]), *args) for k in range(n)]
-        for job in jobs:
-            job.result()
 
 
 @numba.njit(cache=True, error_model="numpy", inline="always")
@@ -220,7 +204,7 @@ def fit_gram(z, y, w, centre, scale, n_valid, exps, rcond):
     s2 = np.zeros(S)
     dof = np.zeros(S)
     ok = np.zeros(S, np.bool_)
-    _over_sensors(_fit_range, S, z, y, w, centre, scale, n_valid, exps, float(rcond), lo, hi,
+    over_rows(_fit_range, S, z, y, w, centre, scale, n_valid, exps, float(rcond), lo, hi,
                   coef, cov, rss, s2, dof, ok)
     return coef, cov, rss, s2, dof, ok
 
@@ -254,7 +238,7 @@ def evaluate(coef, z, centre, scale, exps, lo, hi):
     z (S, c, n), lo/hi (S, c) (pass -inf/inf not to clamp) -> (S, n)."""
     S, n = z.shape[0], z.shape[2]
     out = np.empty((S, n))
-    _over_sensors(_evaluate_range, S, coef, z, centre, scale, exps, lo, hi, out)
+    over_rows(_evaluate_range, S, coef, z, centre, scale, exps, lo, hi, out)
     return out
 
 
@@ -306,7 +290,7 @@ def pauta(r, n_sigma, max_iter):
     count = np.zeros(S, np.int64)
     threshold = np.full(S, np.inf)
     passes = np.zeros(S, np.int64)
-    _over_sensors(_pauta_range, S, r, float(n_sigma), int(max_iter), mask, count, threshold,
+    over_rows(_pauta_range, S, r, float(n_sigma), int(max_iter), mask, count, threshold,
                   passes)
     return mask, count, threshold, passes
 
@@ -331,7 +315,7 @@ def residual_pauta(y, coef, z, centre, scale, exps, n_sigma, max_iter):
     hi = np.full(centre.shape, np.inf)
     mask = np.zeros((S, n), np.bool_)
     count = np.zeros(S, np.int64)
-    _over_sensors(_residual_pauta_range, S, y, coef, z, centre, scale, exps, float(n_sigma),
+    over_rows(_residual_pauta_range, S, y, coef, z, centre, scale, exps, float(n_sigma),
                   int(max_iter), lo, hi, mask, count)
     return mask, count
 
@@ -379,7 +363,7 @@ def masked_block_means(t, y, z, use, start, stop):
     ym = np.empty((S, nb))
     zm = np.empty((S, c, nb))
     cnt = np.zeros((S, nb), np.int64)
-    _over_sensors(_block_means_range, S, t, y, z, use, start, stop, tm, ym, zm, cnt)
+    over_rows(_block_means_range, S, t, y, z, use, start, stop, tm, ym, zm, cnt)
     return tm, ym, zm, cnt
 
 
@@ -434,7 +418,7 @@ def stability(before, after, a, b, start, stop, offsets):
     W = offsets.size - 1
     b0 = np.empty((2, S))
     bs = np.full((2, S, W), np.nan)
-    _over_sensors(_stability_range, S, before, after, int(a), int(b), start, stop, offsets,
+    over_rows(_stability_range, S, before, after, int(a), int(b), start, stop, offsets,
                   b0, bs)
     return b0, bs
 
@@ -458,5 +442,5 @@ def covariate_range(z, w):
     S, c = z.shape[0], z.shape[1]
     lo = np.full((S, c), np.inf)
     hi = np.full((S, c), -np.inf)
-    _over_sensors(_range_range, S, z, w, lo, hi)
+    over_rows(_range_range, S, z, w, lo, hi)
     return lo, hi

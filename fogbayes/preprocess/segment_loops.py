@@ -2,7 +2,8 @@
 
 :func:`merge_runs` labels each sample by its smoothed rate (1 above ``threshold``, -1
 below ``-threshold``, else 0) and applies the merge rule of :mod:`.segments` to each row of
-a (sensors, n) rate array, sensors in parallel::
+a (sensors, n) rate array, sensors on all cores for a fleet (:func:`fogbayes._numba.over_rows`,
+from 8 rows: below that a thread team's start would cost more than a row's work)::
 
     duration(run) = end[last sample] - t[first sample]     (end[i] = t[i + 1], last + median step)
     while there are 2+ runs and the shortest (first of equals) is shorter than min_duration:
@@ -16,9 +17,12 @@ a (sensors, n) rate array, sensors in parallel::
 
 from __future__ import annotations
 
-from .._numba import numba
 import numpy as np
-from numba import prange
+
+from .._numba import numba, over_rows
+
+#: rows from which the loops run on all cores
+MIN_ROWS = 8
 
 
 @numba.njit(cache=True, inline="always")
@@ -69,34 +73,43 @@ def _merge_row(rates, threshold, t, end, min_duration, lab, start, stop):
     return r
 
 
-def _merge_runs(rates, threshold, t, end, min_duration):
-    """Merged runs of the labels of every row of rates (S, n): lab, start, stop (S, R) and
-    count (S,) (R: the most runs of any row before merging)."""
-    S, n = rates.shape
-    first = np.ones(S, np.int64)  # runs before merging: the arrays' width
-    for s in prange(S):
+@numba.njit(cache=True, nogil=True)
+def _count_range(s0, s1, rates, threshold, first):
+    for s in range(s0, s1):
         prev = _label(rates[s, 0], threshold)
-        for i in range(1, n):
+        for i in range(1, rates.shape[1]):
             cur = _label(rates[s, i], threshold)
             first[s] += cur != prev
             prev = cur
-    R = first.max()
+
+
+@numba.njit(cache=True, nogil=True)
+def _merge_range(s0, s1, rates, threshold, t, end, min_duration, lab, start, stop, count):
+    for s in range(s0, s1):
+        count[s] = _merge_row(rates[s], threshold, t, end, min_duration, lab[s], start[s],
+                              stop[s])
+
+
+def merge_runs(rates, threshold, t, end, min_duration):
+    """Merged runs of the labels of every row of rates (S, n): lab, start, stop (S, R) and
+    count (S,) (R: the most runs of any row before merging)."""
+    S = rates.shape[0]
+    threshold, min_duration = float(threshold), float(min_duration)
+    first = np.ones(S, np.int64)  # runs before merging: the arrays' width
+    over_rows(_count_range, S, rates, threshold, first, min_rows=MIN_ROWS)
+    R = int(first.max())
     lab = np.zeros((S, R), np.int64)
     start = np.zeros((S, R), np.int64)
     stop = np.zeros((S, R), np.int64)
     count = np.zeros(S, np.int64)
-    for s in prange(S):
-        count[s] = _merge_row(rates[s], threshold, t, end, min_duration, lab[s], start[s],
-                              stop[s])
+    over_rows(_merge_range, S, rates, threshold, t, end, min_duration, lab, start, stop, count,
+              min_rows=MIN_ROWS)
     return lab, start, stop, count
 
 
-def _run_stats(T, t, start, stop, count):
-    """Mean of T (S, n) and least-squares slope of T on t over each run: (S, R) each."""
-    S, R = start.shape
-    mean = np.zeros((S, R))
-    slope = np.zeros((S, R))
-    for s in prange(S):
+@numba.njit(cache=True, nogil=True)
+def _stats_range(s0, s1, T, t, start, stop, count, mean, slope):
+    for s in range(s0, s1):
         for k in range(count[s]):
             a, b = start[s, k], stop[s, k]
             m = b - a
@@ -115,22 +128,12 @@ def _run_stats(T, t, start, stop, count):
                 sxy += dt * (T[s, i] - yb)
                 sxx += dt * dt
             slope[s, k] = sxy / sxx
+
+
+def run_stats(T, t, start, stop, count):
+    """Mean of T (S, n) and least-squares slope of T on t over each run: (S, R) each."""
+    mean = np.zeros(start.shape)
+    slope = np.zeros(start.shape)
+    over_rows(_stats_range, start.shape[0], T, t, start, stop, count, mean, slope,
+              min_rows=MIN_ROWS)
     return mean, slope
-
-
-def _on_threads_when_many(fn, min_rows: int = 8):
-    """``fn`` compiled twice: serial for a few rows (a thread team's wake-up, ~1-2 ms, would
-    cost more than one row's work, as in the single-recording workflow), parallel over rows
-    for a fleet."""
-    serial = numba.njit(cache=True)(fn)
-    parallel = numba.njit(cache=True, parallel=True)(fn)
-
-    def call(rows, *args):
-        return (parallel if rows.shape[0] >= min_rows else serial)(rows, *args)
-
-    call.__doc__, call.__name__ = fn.__doc__, fn.__name__.lstrip("_")
-    return call
-
-
-merge_runs = _on_threads_when_many(_merge_runs)
-run_stats = _on_threads_when_many(_run_stats)
