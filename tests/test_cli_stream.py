@@ -39,3 +39,29 @@ def test_stream_refuses_a_csv_with_a_one_line_error(tmp_path, capsys):
                  "--stream"])
     err = capsys.readouterr().err
     assert code == 2 and "run.csv" in err and "Traceback" not in err
+
+
+def test_stream_takes_the_lab_units_the_in_memory_command_takes(tmp_path, capsys):
+    rec = simulate("paper004", seed=5, soak=600.0, ramp_rate=4.0).recording.slice(0, 3000)
+    fit = tmp_path / "fit.json"
+    assert main(["-q", "fit", str(save(rec, tmp_path / "run.npz")), "--model", "bias-t",
+                 "--json", str(fit)]) == 0
+    lab = tmp_path / "lab.npz"  # time in ms, the temperature as raw words w = 100 (T + 20)
+    np.savez(lab, time=1e3 * rec.time, output=rec.output,
+             temperature=100.0 * (rec.temperatures[:, 0] + 20.0))
+    units = ["--time-unit", "ms", "--temperature-scale", "0.01", "--temperature-offset", "-20"]
+    assert main(["-q", "compensate", str(lab), "-p", str(fit), "-o", str(tmp_path / "mem.csv"),
+                 "--output-unit", rec.unit, *units]) == 0
+    assert main(["-q", "compensate", str(lab), "-p", str(fit), "-o",
+                 str(tmp_path / "s.parquet"), "--output-unit", rec.unit, "--stream", "--chunk-rows",
+                 "1024", *units]) == 0
+    mem, got = pd.read_csv(tmp_path / "mem.csv"), pd.read_parquet(tmp_path / "s.parquet")
+    assert len(got) == len(mem) == rec.n
+    np.testing.assert_array_equal(got["output"].to_numpy(), mem["output"].to_numpy())
+    np.testing.assert_allclose(got["time"].to_numpy(), rec.time, rtol=1e-15)
+    capsys.readouterr()
+    # without the units the raw words are refused, in one line naming the column
+    code = main(["-q", "compensate", str(lab), "-p", str(fit), "-o", str(tmp_path / "x.parquet"),
+                 "--output-unit", rec.unit, "--stream", "--time-unit", "ms"])
+    err = capsys.readouterr().err
+    assert code == 2 and "temperature" in err and "Traceback" not in err

@@ -18,11 +18,12 @@ import jax
 import numpy as np
 import pytest
 
-from fogbayes.data import Recording, save
+from fogbayes.data import Recording, load, save
 from fogbayes.data.recording import Metadata
 from fogbayes.errors import (
     FileFormatError,
     FogbayesError,
+    ImplausibleValueError,
     MissingColumnError,
     NonFiniteError,
     NonNumericError,
@@ -149,6 +150,42 @@ def test_bad_files_raise_errors_naming_file_column_row(rec, tmp_path, name, err,
         for _ in src.chunks(1000, fields=("output",) if name == "trunc.npy" else ("time", "output")):
             pass
     assert name in str(info.value) and where in str(info.value)
+
+
+def _lab_file(tmp, rec, temperature):
+    """``rec`` as a lab logs it: time in ms, the temperature as raw words (T = w/100 - 20)."""
+    path = tmp / "lab.npz"
+    np.savez(path, time=1e3 * rec.time, output=rec.output, temperature=temperature)
+    return path
+
+
+def test_sources_read_lab_units_as_the_in_memory_loader_does(rec, tmp_path):
+    path = _lab_file(tmp_path, rec, 100.0 * (rec.temperatures[:, 0] + 20.0))
+    units = dict(time_unit="ms", temperature_scale=0.01, temperature_offset=-20.0)
+    ref = load(path, **units)  # the in-memory reader: the reference
+    parts = list(open_source(path, **units).chunks(1000))
+    for field, want in (("time", ref.time), ("output", ref.output),
+                        ("temperatures", ref.temperatures)):
+        np.testing.assert_array_equal(np.concatenate([getattr(c, field) for c in parts]), want)
+    np.testing.assert_allclose(ref.time, rec.time, rtol=1e-15)
+    np.testing.assert_allclose(ref.temperatures[:, 0], rec.temperatures[:, 0], atol=1e-12)
+
+
+def test_sources_refuse_raw_words_and_milliseconds_read_as_degrees_and_seconds(rec, tmp_path):
+    words = 100.0 * (rec.temperatures[:, 0] + 20.0)
+    words[:3100] = 25.0  # plausible as deg C until row 3100 (the fourth chunk of 1000)
+    path = _lab_file(tmp_path, rec, words)
+    with pytest.raises(ImplausibleValueError) as info:
+        for _ in open_source(path, time_unit="ms").chunks(1000):
+            pass
+    msg = str(info.value)
+    assert "lab.npz" in msg and "temperature" in msg and "row 3100" in msg
+    # 10 Hz stamped in microseconds and read as seconds: 1e-5 Hz, below the plausible 1e-4
+    # (in ms it would be 0.01 Hz, which the rule cannot tell from a slow logger)
+    np.savez(tmp_path / "us.npz", time=1e6 * rec.time, output=rec.output)
+    with pytest.raises(ImplausibleValueError, match="not in seconds.*--time-unit"):
+        next(open_source(tmp_path / "us.npz").chunks(1000))
+    assert next(open_source(tmp_path / "us.npz", time_unit="us").chunks(1000)).n == 1000
 
 
 # --------------------------------------------------------------------------------- scan

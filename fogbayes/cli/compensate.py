@@ -211,17 +211,14 @@ def compensate(
                                 column="--stream",
                                 fix="drop --stream (a log is read into memory), or drop "
                                     "--topic/--instance/--axis")
-        if time_unit != "s" or temperature_scale != 1.0 or temperature_offset != 0.0:
-            raise FogbayesError("--stream reads time in s and temperatures in deg C as they "
-                                "are", column="--stream",
-                                fix="convert the file first, or drop --stream (--time-unit "
-                                    "and --temperature-scale/-offset work in memory)")
         given = fit_doc.get("input") or {}
         return open_source(rec, time=time_column or "time", output=column or "output",
                            temperature=list(temperature or []) or names,
                            input_rate=input_rate or "input_rate", unit=unit,
                            scale_factor=scale_factor if scale_factor is not None
-                           else given.get("scale_factor"))
+                           else given.get("scale_factor"), time_unit=time_unit,
+                           temperature_scale=temperature_scale,
+                           temperature_offset=temperature_offset)
 
     if is_loop_document(fit_doc):
         if fit_doc["model"] == "allan":

@@ -6,6 +6,13 @@ number of rows (the last one shorter), each converted to float64 and validated l
 :class:`fogbayes.data.Recording` (finite values, strictly increasing time across chunk
 boundaries), with errors naming the file, the column and the global row.
 
+Units as :func:`fogbayes.data.load` takes them: ``time_unit`` (``ms``, ``us``, ``ns``: times
+are divided into seconds) and ``temperature_scale``/``temperature_offset`` (deg C = scale x
+value + offset, for raw sensor words or kelvin), applied to each chunk as it is read. The
+same plausibility rules hold: a temperature outside -100 ... 200 deg C, or a first chunk
+whose median time step means a sample rate outside 1e-4 Hz ... 1 MHz, stops the stream with
+an error naming the file, the column and (for a temperature) the global row.
+
 Formats (the column contract of :mod:`fogbayes.data.io`):
 
 * ``.npz`` as :func:`fogbayes.data.save` writes it: one 1-D member per column, metadata in
@@ -36,12 +43,14 @@ import numpy as np
 from ..errors import (
     EmptyRecordingError,
     FileFormatError,
+    ImplausibleValueError,
     MissingColumnError,
     NonFiniteError,
     NonNumericError,
     ShapeError,
     TimeOrderError,
 )
+from ..data._read import RATE_RANGE, TEMPERATURE_RANGE, finite, time_divisor
 from ..data.temperature_columns import META_KEY as TEMPERATURES_KEY
 from ..data.temperature_columns import temperature_columns
 from ..data.units import normalise_unit
@@ -83,7 +92,9 @@ class RecordSource:
         path, kind (``npz``, ``npy-dir``, ``npy``, ``parquet``), n (rows), columns (all
         names in the file), meta (the file's metadata dict); the role names ``time_name``,
         ``output_name``, ``temperature_names`` and ``input_rate_name`` (None if absent);
-        ``unit``, ``scale_factor``, ``sensor_id``, ``sample_rate`` (None = unknown).
+        ``unit``, ``scale_factor``, ``sensor_id``, ``sample_rate`` (None = unknown);
+        ``time_divisor`` (file time units per second), ``temperature_scale`` and
+        ``temperature_offset`` (deg C = scale x value + offset).
     """
 
     def __init__(self, path: Path, kind: str, n: int, columns: dict, meta: dict, roles: dict):
@@ -100,6 +111,9 @@ class RecordSource:
         self.sensor_id = roles["sensor_id"]
         sr = meta.get("sample_rate")
         self.sample_rate = float(sr) if sr not in (None, "", "None") else None
+        self.time_divisor = roles.get("time_divisor", 1.0)
+        self.temperature_scale = roles.get("temperature_scale", 1.0)
+        self.temperature_offset = roles.get("temperature_offset", 0.0)
 
     @property
     def source(self) -> str:
@@ -143,7 +157,7 @@ class RecordSource:
         last_t = None
         try:
             for a in range(0, self.n, rows):
-                cols = reader(min(rows, self.n - a))
+                cols = self._in_units(reader(min(rows, self.n - a)), want)
                 if validate:
                     last_t = self._validate(cols, want, a, last_t, allow_nan)
                 temps = want["temperatures"]
@@ -167,6 +181,44 @@ class RecordSource:
         return (lambda k: {nm: s.read(k) for nm, s in streams.items()},
                 lambda: [h.close() for h in handles])
 
+    def _in_units(self, cols: dict, want: dict) -> dict:
+        """Times in seconds and temperatures in deg C (new arrays: readers reuse buffers)."""
+        if self.time_divisor != 1.0 and want["time"]:
+            nm = want["time"][0]
+            cols[nm] = cols[nm] / self.time_divisor
+        if (self.temperature_scale, self.temperature_offset) != (1.0, 0.0):
+            for nm in want["temperatures"]:
+                cols[nm] = self.temperature_scale * cols[nm] + self.temperature_offset
+        return cols
+
+    def _plausible(self, cols, want, start, first: bool) -> None:
+        """The in-memory loader's plausibility rules (:func:`fogbayes.data._read.check_plausible`)."""
+        t_lo, t_hi = TEMPERATURE_RANGE
+        for nm in want["temperatures"]:
+            col = cols[nm]
+            if col.size == 0 or (col.min() >= t_lo and col.max() <= t_hi):
+                continue  # two reductions: no mask array on the common path
+            bad = np.flatnonzero((col < t_lo) | (col > t_hi))
+            if bad.size:
+                raise ImplausibleValueError(
+                    f"value {col[bad[0]]:g} outside {t_lo:g} ... {t_hi:g} deg C: raw sensor "
+                    "words or kelvin, not deg C", file=self.source, column=nm,
+                    row=start + int(bad[0]),
+                    fix="convert the column to deg C, or scale it on load with "
+                        "--temperature-scale A --temperature-offset B (deg C = A x value + B; "
+                        "kelvin: --temperature-offset -273.15)")
+        t = cols[want["time"][0]] if want["time"] else None
+        if first and t is not None and t.size >= 2:
+            med = float(np.median(np.diff(t)))
+            lo, hi = RATE_RANGE
+            if med > 0 and not lo <= 1.0 / med <= hi:
+                raise ImplausibleValueError(
+                    f"the median time step is {med:.6g} s, a sample rate of {1 / med:.3g} Hz, "
+                    f"outside the plausible {lo:g} Hz ... {hi:g} Hz: the times are not in "
+                    "seconds", file=self.source, column=want["time"][0],
+                    fix="name the time unit with --time-unit ms, us or ns (time_unit= in "
+                        "open_source), or convert the column to seconds")
+
     def _validate(self, cols, want, start, last_t, allow_nan):
         for role, names in want.items():
             for nm in names:
@@ -178,6 +230,7 @@ class RecordSource:
                                          column=nm, row=start + i,
                                          fix="remove or repair those rows; fogbayes never fills "
                                              "gaps silently")
+        self._plausible(cols, want, start, first=start == 0)
         if not want["time"]:
             return last_t
         t = cols[want["time"][0]]
@@ -204,7 +257,9 @@ def _missing(name: str, role: str, have, src: str) -> MissingColumnError:
 def open_source(path, *, time: str = "time", output: str = "output",
                 temperature: str | Sequence[str] | None = None,
                 input_rate: str | None = "input_rate", unit: str | None = None,
-                scale_factor: float | None = None, sensor_id: str | None = None) -> RecordSource:
+                scale_factor: float | None = None, sensor_id: str | None = None,
+                time_unit: str = "s", temperature_scale: float = 1.0,
+                temperature_offset: float = 0.0) -> RecordSource:
     """Open a large recording for chunked reading (arguments as :func:`fogbayes.data.load`).
 
     ``path``: ``.npz``, ``.parquet``/``.pq``, ``.npy`` or a directory of ``<column>.npy``.
@@ -212,6 +267,9 @@ def open_source(path, *, time: str = "time", output: str = "output",
     """
     path = Path(path)
     src = str(path)
+    divisor = time_divisor(time_unit)
+    t_scale = finite(temperature_scale, "temperature_scale", nonzero=True)
+    t_offset = finite(temperature_offset, "temperature_offset")
     if path.is_dir():
         kind, scan = "npy-dir", _scan_npy_dir
     else:
@@ -256,5 +314,7 @@ def open_source(path, *, time: str = "time", output: str = "output",
     roles = {"time": time, "output": output, "temperature": tnames, "input_rate": rate,
              "unit": normalise_unit(unit or str(meta.get("unit", "deg/h")), file=src),
              "scale_factor": float(sf) if sf not in (None, "", "None") else None,
-             "sensor_id": sensor_id or str(meta.get("sensor_id", path.stem))}
+             "sensor_id": sensor_id or str(meta.get("sensor_id", path.stem)),
+             "time_divisor": divisor, "temperature_scale": t_scale,
+             "temperature_offset": t_offset}
     return RecordSource(path, kind, n, cols, meta, roles)
