@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.batch import kernels
+from fogbayes.batch import block_kernels, kernels
 from fogbayes.inference.lsq import lstsq
 from fogbayes.models.polynomial import design, make_basis
 from fogbayes.preprocess import pauta_flags
@@ -96,7 +96,7 @@ def test_masked_block_means_equal_block_average():
     use = rng.random((3, n)) > 0.1
     use[1, 200:260] = False  # whole blocks left out
     bi = block_index(t, 1.0, partial="drop")
-    tm, ym, zm, cnt = kernels.masked_block_means(t, y, z, use, bi.start, bi.stop)
+    tm, ym, zm, cnt = block_kernels.masked_block_means(t, y, z, use, bi.start, bi.stop)
     for s in range(3):
         ref = block_average(np.column_stack([y[s], z[s].T]), 1.0, time=t, mask=~use[s])
         np.testing.assert_array_equal(cnt[s], ref.count)

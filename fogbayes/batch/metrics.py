@@ -11,7 +11,7 @@ What makes it fast is that a lab samples its gyros with one clock and soaks them
 chamber: many sensors share a time vector and the same segment bounds. The block layout of
 a (time vector, segment, window) is built once (:func:`fogbayes.preprocess.blocks.block_index`,
 the same function the single-sensor path uses) and one compiled loop over the sensors that
-share it (:func:`.kernels.stability`, sensors on all cores) gives B0 and every window's Bs.
+share it (:func:`.block_kernels.stability`, sensors on all cores) gives B0 and every window's Bs.
 Sensors with a clock or segments of their own still work; they share less. Numbers equal the
 single-sensor path to rounding (sums in sample order rather than NumPy's pairwise order:
 ~1e-15 relative).
@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import TooShortError
 from ..stats.stability import DEFAULT_WINDOWS, improvement_pct
 from ..preprocess.blocks import block_index
-from . import kernels
+from . import block_kernels
 
 
 class _Layouts:
@@ -55,8 +55,8 @@ def _report(before: np.ndarray, after: np.ndarray, t: np.ndarray, tkey, a: int, 
     start = np.concatenate([lay[0] for _, lay in lays] or [np.zeros(0, np.int64)])
     stop = np.concatenate([lay[1] for _, lay in lays] or [np.zeros(0, np.int64)])
     offsets = np.cumsum([0] + [lay[0].size for _, lay in lays])
-    (b0_b, b0_a), (bs_b, bs_a) = (v.tolist() for v in kernels.stability(before, after, a, b,
-                                                                        start, stop, offsets))
+    b0, bs = block_kernels.stability(before, after, a, b, start, stop, offsets)
+    (b0_b, b0_a), (bs_b, bs_a) = b0.tolist(), bs.tolist()
     duration = float(t[b - 1] - t[a])
     return [{"bias_before": b0_b[s], "bias_after": b0_a[s], "duration_s": duration,
              "stability": [{"window_s": w, "before": bs_b[s][j], "after": bs_a[s][j],

@@ -10,7 +10,7 @@ the whole group:
   (sensors, n) temperatures);
 * block means (``average_s`` blocks, with or without Pauta-flagged samples left out): the
   block layout is built once (:func:`fogbayes.preprocess.blocks.block_index`) and one
-  compiled loop (:func:`.kernels.masked_block_means`) averages every sensor's rate and
+  compiled loop (:func:`.block_kernels.masked_block_means`) averages every sensor's rate and
   covariates over it;
 * segments: :func:`fogbayes.preprocess.segments.segment_thermal_rows` (one filter call).
 
@@ -31,7 +31,7 @@ from ..preprocess.blocks import block_index
 from ..preprocess.segments import segment_thermal_rows
 from ..thermal.data import Blocks, fit_blocks, sample_covariates
 from ..thermal.workflow import thermal_segments
-from . import kernels
+from . import block_kernels
 
 
 def clock_groups(recs) -> list[list[int]]:
@@ -44,7 +44,7 @@ def clock_groups(recs) -> list[list[int]]:
 
 def covariate_major(zs) -> np.ndarray:
     """Per-sample covariates of S sensors, (n, c) each, as one C-contiguous (S, c, n) array
-    (each covariate of a sensor one contiguous row: the layout :mod:`.kernels` reads)."""
+    (each covariate of a sensor one contiguous row: the layout the compiled kernels read)."""
     out = np.empty((len(zs), zs[0].shape[1], zs[0].shape[0]))
     for s, z in enumerate(zs):
         out[s] = z.T
@@ -148,7 +148,7 @@ def block_arrays(recs, rates, Z, spec, proc, use=None, groups=None) -> BlockArra
             tm = np.broadcast_to(t[rows], (g.size, bi.start.size))
             ym, zm, cnt = y[:, rows], z[:, :, rows], u[:, rows].astype(np.int64)
         else:
-            tm, ym, zm, cnt = kernels.masked_block_means(t, y, z, u, bi.start, bi.stop)
+            tm, ym, zm, cnt = block_kernels.masked_block_means(t, y, z, u, bi.start, bi.stop)
         parts.append((group, tm, ym, zm, cnt))
     if len(parts) == 1 and parts[0][0] == list(range(S)):
         return BlockArrays(*parts[0][1:])
