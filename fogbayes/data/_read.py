@@ -484,19 +484,47 @@ def finite(value, name: str, *, nonzero: bool = False, positive: bool = False) -
 
 
 # -- plausibility ----------------------------------------------------------------------
+def check_time_step(t: np.ndarray, *, src: str, column: str) -> float | None:
+    """The sample rate 1 / median step of ``t`` (seconds), None for fewer than 2 samples;
+    raises when it is outside :data:`RATE_RANGE` (times not in seconds)."""
+    if t.size < 2:
+        return None
+    lo, hi = RATE_RANGE
+    med = float(np.median(np.diff(t)))
+    fs = 1.0 / med
+    if not lo <= fs <= hi:
+        raise ImplausibleValueError(
+            f"the median time step is {med:.6g} s, a sample rate of {fs:.3g} Hz, outside "
+            f"the plausible {lo:g} Hz ... {hi:g} Hz: the times are not in seconds",
+            file=src, column=column,
+            fix="name the time unit with --time-unit ms, us or ns (time_unit= in "
+                "fogbayes.load), or convert the column to seconds")
+    return fs
+
+
+def check_temperature(col: np.ndarray, *, src: str, column: str, first_row: int = 0) -> None:
+    """Raise when a temperature (deg C) is outside :data:`TEMPERATURE_RANGE`; the row named is
+    ``first_row`` + its index (a chunk's place in the file)."""
+    t_lo, t_hi = TEMPERATURE_RANGE
+    if col.size == 0 or (col.min() >= t_lo and col.max() <= t_hi):
+        return  # two reductions: no mask array on the common path
+    bad = np.flatnonzero((col < t_lo) | (col > t_hi))
+    if bad.size:
+        raise ImplausibleValueError(
+            f"{bad.size} value(s) outside {t_lo:g} ... {t_hi:g} deg C (first: "
+            f"{col[bad[0]]:g}): raw sensor words or kelvin, not deg C", file=src,
+            column=column, row=first_row + int(bad[0]),
+            fix="convert the column to deg C, or scale it on load with "
+                "--temperature-scale A --temperature-offset B (deg C = A x value + B; "
+                "kelvin: --temperature-offset -273.15)")
+
+
 def check_plausible(rec, *, src: str, time_column: str, table: Table) -> None:
     """Refuse a recording whose numbers are valid but physically implausible."""
     lo, hi = RATE_RANGE
     if rec.n >= 2:
-        med = float(np.median(np.diff(rec.time)))
-        fs = 1.0 / med
-        if not lo <= fs <= hi:
-            raise ImplausibleValueError(
-                f"the median time step is {med:.6g} s, a sample rate of {fs:.3g} Hz, outside "
-                f"the plausible {lo:g} Hz ... {hi:g} Hz: the times are not in seconds",
-                file=src, column=time_column,
-                fix="name the time unit with --time-unit ms, us or ns (time_unit= in "
-                    "fogbayes.load), or convert the column to seconds")
+        fs = check_time_step(rec.time, src=src, column=time_column)
+        med = 1.0 / fs
         declared = rec.meta.sample_rate
         if declared and not 1 / RATE_TOLERANCE <= declared / fs <= RATE_TOLERANCE:
             raise MetadataError(
@@ -510,15 +538,5 @@ def check_plausible(rec, *, src: str, time_column: str, table: Table) -> None:
                             f"{lo:g} Hz ... {hi:g} Hz", file=src,
                             line=table.meta_lines.get("sample_rate"),
                             fix="correct or delete the sample_rate metadata")
-    t_lo, t_hi = TEMPERATURE_RANGE
     for j, name in enumerate(rec.temperature_names):
-        col = rec.temperatures[:, j]
-        bad = np.flatnonzero((col < t_lo) | (col > t_hi))
-        if bad.size:
-            raise ImplausibleValueError(
-                f"{bad.size} value(s) outside {t_lo:g} ... {t_hi:g} deg C (first: "
-                f"{col[bad[0]]:g}): raw sensor words or kelvin, not deg C", file=src,
-                column=name, row=int(bad[0]),
-                fix="convert the column to deg C, or scale it on load with "
-                    "--temperature-scale A --temperature-offset B (deg C = A x value + B; "
-                    "kelvin: --temperature-offset -273.15)")
+        check_temperature(rec.temperatures[:, j], src=src, column=name)

@@ -43,14 +43,13 @@ import numpy as np
 from ..errors import (
     EmptyRecordingError,
     FileFormatError,
-    ImplausibleValueError,
     MissingColumnError,
     NonFiniteError,
     NonNumericError,
     ShapeError,
     TimeOrderError,
 )
-from ..data._read import RATE_RANGE, TEMPERATURE_RANGE, finite, time_divisor
+from ..data._read import check_temperature, check_time_step, finite, time_divisor
 from ..data.temperature_columns import META_KEY as TEMPERATURES_KEY
 from ..data.temperature_columns import temperature_columns
 from ..data.units import normalise_unit
@@ -191,33 +190,13 @@ class RecordSource:
                 cols[nm] = self.temperature_scale * cols[nm] + self.temperature_offset
         return cols
 
-    def _plausible(self, cols, want, start, first: bool) -> None:
-        """The in-memory loader's plausibility rules (:func:`fogbayes.data._read.check_plausible`)."""
-        t_lo, t_hi = TEMPERATURE_RANGE
+    def _plausible(self, cols, want, start: int) -> None:
+        """The in-memory loader's plausibility rules (:func:`fogbayes.data._read.check_plausible`):
+        every chunk's temperatures, the first chunk's sample rate."""
         for nm in want["temperatures"]:
-            col = cols[nm]
-            if col.size == 0 or (col.min() >= t_lo and col.max() <= t_hi):
-                continue  # two reductions: no mask array on the common path
-            bad = np.flatnonzero((col < t_lo) | (col > t_hi))
-            if bad.size:
-                raise ImplausibleValueError(
-                    f"value {col[bad[0]]:g} outside {t_lo:g} ... {t_hi:g} deg C: raw sensor "
-                    "words or kelvin, not deg C", file=self.source, column=nm,
-                    row=start + int(bad[0]),
-                    fix="convert the column to deg C, or scale it on load with "
-                        "--temperature-scale A --temperature-offset B (deg C = A x value + B; "
-                        "kelvin: --temperature-offset -273.15)")
-        t = cols[want["time"][0]] if want["time"] else None
-        if first and t is not None and t.size >= 2:
-            med = float(np.median(np.diff(t)))
-            lo, hi = RATE_RANGE
-            if med > 0 and not lo <= 1.0 / med <= hi:
-                raise ImplausibleValueError(
-                    f"the median time step is {med:.6g} s, a sample rate of {1 / med:.3g} Hz, "
-                    f"outside the plausible {lo:g} Hz ... {hi:g} Hz: the times are not in "
-                    "seconds", file=self.source, column=want["time"][0],
-                    fix="name the time unit with --time-unit ms, us or ns (time_unit= in "
-                        "open_source), or convert the column to seconds")
+            check_temperature(cols[nm], src=self.source, column=nm, first_row=start)
+        if start == 0 and want["time"]:
+            check_time_step(cols[want["time"][0]], src=self.source, column=want["time"][0])
 
     def _validate(self, cols, want, start, last_t, allow_nan):
         for role, names in want.items():
@@ -230,8 +209,8 @@ class RecordSource:
                                          column=nm, row=start + i,
                                          fix="remove or repair those rows; fogbayes never fills "
                                              "gaps silently")
-        self._plausible(cols, want, start, first=start == 0)
         if not want["time"]:
+            self._plausible(cols, want, start)
             return last_t
         t = cols[want["time"][0]]
         dt = np.diff(t) if last_t is None else np.diff(t, prepend=last_t)
@@ -241,6 +220,7 @@ class RecordSource:
             raise TimeOrderError(f"time does not increase at this row (step {dt[bad[0]]!r} s)",
                                  file=self.source, column=want["time"][0], row=r,
                                  fix="sort the rows by time and remove duplicate time stamps")
+        self._plausible(cols, want, start)  # after the order check: the steps are > 0
         return float(t[-1]) if t.size else last_t
 
 
