@@ -87,7 +87,7 @@ def batch(
             "scale_factor": scale_factor, "temperature": temperature or None,
             "input_rate": input_rate, "time_unit": time_unit,
             "temperature_scale": temperature_scale, "temperature_offset": temperature_offset}
-    from ..data._read import finite, time_divisor
+    from ..data.checks import finite, time_divisor
 
     time_divisor(time_unit)  # bad reading options: exit 2 now, not one failure per file
     finite(temperature_scale, "--temperature-scale", nonzero=True)

@@ -26,7 +26,8 @@ import numpy as np
 
 from ..errors import (ArgumentError, EmptyRecordingError, FileFormatError, FogbayesError,
                       MissingColumnError, NonNumericError)
-from ._read import Table, check_plausible, finite, meta_float, meta_text, meta_unit, time_divisor
+from ._read import Table
+from .checks import check_plausible, finite, meta_float, meta_text, meta_unit, time_divisor
 from ._read import read_csv as _read_csv
 from ._read import read_npz as _read_npz
 from ._read import read_parquet as _read_parquet

@@ -49,7 +49,7 @@ from ..errors import (
     ShapeError,
     TimeOrderError,
 )
-from ..data._read import check_temperature, check_time_step, finite, time_divisor
+from ..data.checks import check_temperature, check_time_step, finite, time_divisor
 from ..data.temperature_columns import META_KEY as TEMPERATURES_KEY
 from ..data.temperature_columns import temperature_columns
 from ..data.units import normalise_unit
@@ -191,7 +191,7 @@ class RecordSource:
         return cols
 
     def _plausible(self, cols, want, start: int) -> None:
-        """The in-memory loader's plausibility rules (:func:`fogbayes.data._read.check_plausible`):
+        """The in-memory loader's plausibility rules (:func:`fogbayes.data.checks.check_plausible`):
         every chunk's temperatures, the first chunk's sample rate."""
         for nm in want["temperatures"]:
             check_temperature(cols[nm], src=self.source, column=nm, first_row=start)
