@@ -104,6 +104,8 @@ def _wls_doc(fit: AllanFit, data) -> dict:
     return _fit_doc(fit, terms, data, {"diagnostics": {
         "chi2": fit.info["chi2"], "dof": fit.info["dof"], "gof_p": fit.info["gof_p"],
         "dispersion": fit.info["dispersion"],
+        # False: the GLS weights cycled between solutions; the likeliest was kept
+        "weights_settled": fit.info["weights_settled"], "passes": fit.info["passes"],
         "interval": "Gauss-Newton in log space; low = 0 when dropping the term raises chi2 "
                     "by < 2.71 (profile likelihood)"}})
 

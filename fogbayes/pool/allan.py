@@ -27,7 +27,7 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from ..allan.fit import Z90
+from ..allan.fit import GOF_LEVEL, Z90
 from ..allan.model import TERMS, UNITS
 
 SCHEMA = "fogbayes.pool/1"
@@ -130,6 +130,12 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
     failed = [u.name for u in units if not u.converged]
     if failed:
         out.append(f"the single-unit fit did not converge for {', '.join(failed)}")
+    misfit = [f"{u.name} (p = {u.gof_p:.2g})" for u in units if u.gof_p < GOF_LEVEL]
+    if misfit:
+        out.append(f"the five-term model does not describe the Allan curve of "
+                   f"{', '.join(misfit)}, even with its shortest taus left out: every interval "
+                   f"of such a unit is widened by sqrt(chi2/dof), so it enters the pool with "
+                   f"little weight; plot its ADEV (fogbayes allan --report) before trusting it")
     rates = sorted({u.fs for u in units})
     if len(rates) > 1:
         out.append(f"the units were sampled at different rates ({', '.join(f'{r:g}' for r in rates)} "
