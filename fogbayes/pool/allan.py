@@ -89,6 +89,9 @@ def resolved_covariance(unit: UnitFit) -> np.ndarray:
     and each unresolved term keeps its own variance with no covariance (the pool replaces
     a pooled one's by its flat-below width). Over the resolved terms of those 200 units the
     errors over the conditioned sds have RMS 1.04 (N), 1.00 (B), 1.04 (K): still calibrated.
+    (Those two units' wide N came from single-unit fits stopped on the wrong side of a GLS
+    cycle, :func:`fogbayes.allan.fit._reweighted`; the conditioning stays right for any
+    unit whose terms are unresolved.)
     """
     cov = np.asarray(unit.cov, dtype=float)
     cen = np.array([t in unit.terms and unit.terms[t].low <= 0.0 for t in TERMS])
