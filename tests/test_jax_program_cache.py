@@ -63,8 +63,13 @@ def test_a_second_process_reads_the_program_the_first_compiled(tmp_path):
     written = _entries(folder)
     assert any(name.startswith("jit_f-") for name in written)
     second = _run({"FOGBAYES_CACHE_DIR": str(tmp_path)})
-    assert second["hits"] >= 1 and second["misses"] == 0
-    assert _entries(folder) == written  # read, not written again
+    # f is read, not compiled and written again. Only f's entry is compared: the small
+    # helper programs (array creation, division) compile in about CACHE_MIN_SECONDS, so on
+    # a loaded box one of them can be worth a file in one process and not in the other (a
+    # clean-clone CI run at 18a86d3: the second process had 1 hit and 1 miss).
+    assert second["hits"] >= 1
+    f_entries = [name for name in written if name.startswith("jit_f-")]
+    assert [name for name in _entries(folder) if name.startswith("jit_f-")] == f_entries
     # jax 0.9.2's loader logs two false SIGILL lines per program unless XLA's log is quiet
     assert "SIGILL" not in second["stderr"] and "AOT" not in second["stderr"]
 
