@@ -11,7 +11,8 @@ r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS
   :math:`\min_\theta\ \tfrac12 r^\top V^{-1} r`, :math:`r_j = \log\hat\sigma^2_j -
   \log\sigma^2_j(\theta) - b_j`, with :math:`b_j = \psi(\nu_j/2) - \log(\nu_j/2)` the mean of
   :math:`\log(\chi^2_\nu/\nu)` and :math:`V` its covariance (trigamma variances, correlations of
-  the estimates from :mod:`fogbayes.stats.allan_cov`), recomputed at the estimate (3 passes, more until the estimate settles, see :func:`_reweighted`);
+  the estimates from :mod:`fogbayes.stats.allan_cov`), recomputed at the estimate (3 passes,
+  more until the estimate settles, see :func:`_reweighted`);
   Gauss-Newton with a trust region on the whitened residuals (SciPy, NumPy: five
   parameters and ~20 taus, no compilation). A weak normal penalty (sd 10 in log) keeps terms that
   are absent from running to zero. Intervals: :math:`\exp(\hat\theta \pm 1.645\,se)` with the
