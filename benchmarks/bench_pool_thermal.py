@@ -102,7 +102,7 @@ def main():
         rows = list(ex.map(one_fleet, range(args.fleets), [args.units] * args.fleets,
                            [args.outlier_sd] * args.fleets))
     summary = summarise(rows)
-    from fogbayes._json import to_jsonable
+    from fogbayes.support.jsonable import to_jsonable
 
     with open(args.out, "w") as f:
         json.dump(to_jsonable({"MU": MU.tolist(), "SD": SD.tolist(), "outlier_sd": args.outlier_sd,

@@ -109,7 +109,7 @@ class ArgumentError(FogbayesError):
 
 class MissingExtraError(FogbayesError):
     """An optional package is not installed (Parquet: pyarrow; ``--engine dask``:
-    distributed); the fix names the extra that installs it (:mod:`fogbayes._optional`)."""
+    distributed); the fix names the extra that installs it (:mod:`fogbayes.support.extras`)."""
 
 
 class DuplicateColumnError(FileFormatError):

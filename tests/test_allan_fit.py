@@ -67,6 +67,24 @@ def test_cycling_gls_weights_keep_the_likelier_solution():
     assert fit.info["gof_p"] > 0.05 and fit.info["dispersion"] == 1.0
     assert 0.8 < fit.params.K / truth["K"] < 1.25  # measured 1.04
     assert fit.terms["K"].low <= truth["K"] <= fit.terms["K"].high
+    # and `fogbayes allan` tells its reader so
+    from fogbayes.allan.workflow import _wls_doc
+    from fogbayes.cli.allan import summary_lines
+
+    doc = {"n": y.size, "fs": FS, "tau": fit.info["keep"], "fit": _wls_doc(fit, prepare(y, FS))}
+    assert any("cycled" in line for line in summary_lines(doc))
+
+
+def test_covariance_at_the_estimate_is_the_fits_own_and_moves_with_the_point(data):
+    from fogbayes.allan.fit import log_covariance_at
+
+    fit = fit_wls(data)
+    own = log_covariance_at(fit, data, fit.info["logp"])
+    np.testing.assert_allclose(own, fit.info["cov_log"], rtol=1e-10, atol=1e-14)
+    # B one e-fold lower dominates fewer taus: its log-space variance grows
+    lower = np.array(fit.info["logp"])
+    lower[2] -= 1.0
+    assert log_covariance_at(fit, data, lower)[2, 2] > 1.5 * own[2, 2]
 
 
 def test_settled_gls_weights_are_a_fixed_point(data):

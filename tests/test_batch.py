@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fogbayes._json import to_jsonable
+from fogbayes.support.jsonable import to_jsonable
 from fogbayes.cli import main
 from fogbayes.data import load
 from fogbayes.data.io import save

@@ -9,7 +9,7 @@ import pytest
 
 import fogbayes.cli as cli
 import fogbayes.cli.loop  # noqa: F401  (registers the command)
-from fogbayes._json import to_jsonable
+from fogbayes.support.jsonable import to_jsonable
 from fogbayes.data import save
 from fogbayes.diagnose.context import make_context
 from fogbayes.diagnose.fitting import fit_terms

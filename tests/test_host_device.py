@@ -7,7 +7,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from fogbayes import _lazy
+from fogbayes.support import lazy as _lazy
 from fogbayes.inference.nuts import on_host
 
 

@@ -32,11 +32,27 @@ def test_no_figure_module_imports_a_report():
 def test_the_data_layer_imports_nothing_above_it():
     """data is the bottom layer: recordings, files, documents. A family's document rules
     live in the family and are named in data.documents.MODEL_CHECKS, not imported."""
-    below = ("fogbayes.data", "fogbayes.errors", "fogbayes.data.units", "fogbayes._")
+    below = ("fogbayes.data", "fogbayes.errors", "fogbayes.data.units", "fogbayes._config",
+             "fogbayes.support")
     for f in sorted((PKG / "data").glob("*.py")):
         bad = [m for m in _relative_imports(f)
                if m != "fogbayes" and not m.startswith(below)]
         assert bad == [], f"data/{f.name} imports {bad}"
+
+
+def test_the_package_root_holds_only_the_api_errors_and_config():
+    """Everything else lives in a package that says what it is for (docs/DESIGN.md)."""
+    loose = sorted(f.name for f in PKG.glob("*.py"))
+    assert loose == ["__init__.py", "__main__.py", "_config.py", "errors.py"], loose
+
+
+def test_support_imports_no_model_family():
+    """support/ sits under every family: it may use errors and config, nothing above."""
+    for f in sorted((PKG / "support").glob("*.py")):
+        bad = [m for m in _relative_imports(f)
+               if m not in ("fogbayes", "fogbayes.errors", "fogbayes._config")
+               and not m.startswith("fogbayes.support")]
+        assert bad == [], f"support/{f.name} imports {bad}"
 
 
 @pytest.mark.parametrize("family", ["composite", "thermal", "allan", "arma"])

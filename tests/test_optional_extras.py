@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import fogbayes
-from fogbayes._optional import DASK, PARQUET, require
+from fogbayes.support.extras import DASK, PARQUET, require
 from fogbayes.cli import main
 from fogbayes.errors import FogbayesError, MissingExtraError
 
@@ -113,7 +113,7 @@ def test_require_returns_the_module_when_installed():
 
 
 def test_an_installed_but_broken_package_is_said_so(monkeypatch):
-    import fogbayes._optional as opt
+    import fogbayes.support.extras as opt
 
     def broken(name):
         raise ImportError("libarrow.so.2000: cannot open shared object file\nmore detail")
@@ -129,7 +129,7 @@ def test_an_installed_but_broken_package_is_said_so(monkeypatch):
 def test_a_module_missing_inside_an_extra_is_not_blamed_on_it(monkeypatch):
     """ModuleNotFoundError for some other module (a dependency of the package) is not
     'the package is not installed'."""
-    import fogbayes._optional as opt
+    import fogbayes.support.extras as opt
 
     def inner(name):
         raise ModuleNotFoundError("No module named 'tornado'", name="tornado")

@@ -1,10 +1,10 @@
-"""``fogbayes._numba.over_rows``: rows split over threads, each row run exactly once."""
+"""``fogbayes.support.numba_cache.over_rows``: rows split over threads, each row run exactly once."""
 
 import numba as nb
 import numpy as np
 import pytest
 
-from fogbayes._numba import numba, over_rows
+from fogbayes.support.numba_cache import numba, over_rows
 
 
 @numba.njit(nogil=True)

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .._xp import namespace, special
+from ..support.xp import namespace, special
 
 from ..errors import TooShortError
 from .model import POWERS, TERMS, _A_PER_P2, avar, noise_scales

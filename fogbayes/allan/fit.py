@@ -202,12 +202,8 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
     log_obs = np.log(data.avar)
     logp, loss, gnorm, b, prec, settled, n_passes = _reweighted(
         logp, mask, data, keep, log_obs, passes)
-    J = _log_model_jacobian(logp, mask, tau)
     on = mask > 0
-    Jm = J[:, on]
-    info_mat = Jm.T @ prec @ Jm + np.eye(int(on.sum())) / PENALTY_SD**2
-    cov = np.zeros((5, 5))
-    cov[np.ix_(on, on)] = np.linalg.inv(info_mat)
+    cov = _gauss_newton_cov(logp, mask, tau, prec)
     se = np.sqrt(np.diag(cov))
     value = np.exp(logp) * mask
     converged = bool(np.isfinite(loss) and gnorm < 1e-4 * max(1.0, abs(loss)))
@@ -236,6 +232,34 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
                      "d_chi2_without": dict(zip(TERMS, d_chi2)), "loss": loss,
                      "gradient_norm": gnorm, "weights_settled": settled,
                      "passes": n_passes})
+
+
+def _gauss_newton_cov(logp, mask, tau, prec) -> np.ndarray:
+    """(J^T V^-1 J + I / PENALTY_SD^2)^-1 on the terms in ``mask`` (zeros elsewhere), (5, 5)."""
+    on = np.asarray(mask) > 0
+    J = _log_model_jacobian(logp, mask, tau)[:, on]
+    cov = np.zeros((5, 5))
+    cov[np.ix_(on, on)] = np.linalg.inv(J.T @ prec @ J + np.eye(int(on.sum())) / PENALTY_SD**2)
+    return cov
+
+
+def log_covariance_at(fit: AllanFit, data: AllanFitData, logp) -> np.ndarray:
+    r"""The covariance of ``fit``'s log-parameters with the GLS weights and the Jacobian taken
+    at other log-parameters ``logp`` (same terms, same kept taus, same dispersion).
+
+    The Gauss-Newton covariance depends on where it is evaluated: at the unit's own estimate
+    a term estimated high also dominates more taus and so gets a smaller log-space variance.
+    Across units those variances follow the errors (correlation +0.37 for B on the fleets of
+    ``benchmarks/bench_pool.py``), and a precision-weighted mean leans towards the high side.
+    Evaluated at a better guess of the truth (a pooled, shrunk estimate) they do not.
+    ``data`` is the data the fit used (as :func:`fit_range` returns it).
+    """
+    mask = _mask(fit.terms)
+    keep = np.asarray(fit.info["keep"], bool)
+    if keep.size != data.tau.size:  # fit_range's data are already restricted to keep
+        keep = np.ones(data.tau.size, bool)
+    _, prec = _gls_weights(np.asarray(logp, float), mask, data, keep)
+    return _gauss_newton_cov(logp, mask, np.asarray(data.tau, float), prec) * fit.info["dispersion"]
 
 
 def _reweighted(logp, mask, data, keep, log_obs, passes):

@@ -1,6 +1,6 @@
 r"""Allan-variance noise models as pure functions of tau (paper 002, table 1; IEEE 952).
 
-NumPy in, NumPy out; JAX in, JAX out (:mod:`fogbayes._xp`): the same functions serve the
+NumPy in, NumPy out; JAX in, JAX out (:mod:`fogbayes.support.xp`): the same functions serve the
 direct fits and the NumPyro posteriors.
 
 Five-term model, sigma in deg/h and tau in s, parameters in canonical units::
@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from .._xp import namespace
+from ..support.xp import namespace
 
 TERMS = ("Q", "N", "B", "K", "R")
 UNITS = {"Q": "arcsec", "N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h^1.5", "R": "deg/h^2"}
@@ -61,7 +61,7 @@ class AllanParams(NamedTuple):
 
 def term_avar(params, tau):
     """Variance of each term, shape (5, len(tau)) in (deg/h)^2, in the order of TERMS
-    (NumPy in, NumPy out; JAX in, JAX out: :mod:`fogbayes._xp`)."""
+    (NumPy in, NumPy out; JAX in, JAX out: :mod:`fogbayes.support.xp`)."""
     xp = namespace(params, tau)
     tau = xp.asarray(tau, dtype=float)
     return xp.stack([_A_PER_P2[t] * xp.asarray(p, dtype=float) ** 2 * tau ** POWERS[t]

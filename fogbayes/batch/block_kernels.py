@@ -6,15 +6,15 @@
   compensation (paper 004 eqs. 12-13) over shared block windows.
 
 Written as :mod:`.kernels` is: a ``nogil`` range loop per kernel, run on contiguous ranges
-of sensors by :func:`fogbayes._numba.over_rows`; sums in sample order; the machine code is
-cached in the user's cache folder (:mod:`fogbayes._numba`).
+of sensors by :func:`fogbayes.support.numba_cache.over_rows`; sums in sample order; the machine code is
+cached in the user's cache folder (:mod:`fogbayes.support.numba_cache`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba, over_rows
+from ..support.numba_cache import numba, over_rows
 
 
 @numba.njit(cache=True, error_model="numpy", nogil=True)

@@ -17,7 +17,7 @@ daemon to install or leave behind; the same ``Client`` code is pointed at a remo
 scheduler by its address; and each future carries its own exception, so a failure stays
 with its recording. Nothing of fogbayes depends on Dask outside this module, and Dask is an
 extra (``pip install 'fogbayes[dask]'``): without it, ``engine="dask"`` stops before any work
-with one line naming the extra (:func:`check_engine`, :mod:`fogbayes._optional`).
+with one line naming the extra (:func:`check_engine`, :mod:`fogbayes.support.extras`).
 
 Every worker imports :mod:`fogbayes` before it runs anything (a worker plugin), which turns
 on JAX float64 there too: the numbers a worker computes are those this process computes
@@ -33,7 +33,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-from .._optional import DASK, require
+from ..support.extras import DASK, require
 from .files import FleetError
 
 ENGINES = ("local", "dask")

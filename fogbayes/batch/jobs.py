@@ -83,7 +83,7 @@ def output_names(stem: str) -> list[str]:
 
 def write_json(obj: Any, path: Path) -> Path:
     """The JSON text the command line writes (``fogbayes fit --json``), quietly, atomically."""
-    from .._json import to_jsonable
+    from ..support.jsonable import to_jsonable
     from ..data.atomic import write_text
 
     return write_text(Path(path), json.dumps(to_jsonable(obj), indent=2) + "\n")

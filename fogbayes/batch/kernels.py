@@ -26,11 +26,11 @@ Sums run in sample order (NumPy sums pairwise), so results agree with the NumPy 
 rounding, ~1e-15 relative (tests/test_batch_kernels.py). Covariates are stored
 covariate-major, z (S, c, n): each covariate of a sensor is one contiguous row, as the
 per-sensor min/max and the block means read them. ``cache=True``: the machine code is
-stored in the user's cache folder (:mod:`fogbayes._numba`), so only a first process pays
+stored in the user's cache folder (:mod:`fogbayes.support.numba_cache`), so only a first process pays
 the compilation.
 
 Sensors run on all cores as contiguous ranges, one per thread
-(:func:`fogbayes._numba.over_rows`: Python threads calling a ``nogil`` loop
+(:func:`fogbayes.support.numba_cache.over_rows`: Python threads calling a ``nogil`` loop
 ``_*_range(s0, s1, ...)``), not as Numba ``prange`` loops: the same arithmetic and speed,
 but Numba's parallel passes made the first compilation
 ~3x longer (all six kernels with an empty cache: 29 s as ``prange`` loops, 10 s as range
@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba, over_rows
+from ..support.numba_cache import numba, over_rows
 
 CHUNK = 256  # rows of the design built at a time: (p, CHUNK) stays in L1
 

@@ -12,8 +12,8 @@ from typing import Any
 import typer
 from rich.console import Console
 
-from .._json import (
-    to_jsonable,  # the one sanitiser (fogbayes/_json.py), re-exported here
+from ..support.jsonable import (
+    to_jsonable,  # the one sanitiser (fogbayes/support/jsonable.py), re-exported here
 )
 from ..data import Recording, load
 from ..errors import FogbayesError

@@ -35,6 +35,15 @@ def summary_lines(doc: dict) -> list[str]:
         urad = (f"  = {e['value_urad']:.4g} urad" if "value_urad" in e else "")
         out.append(f"  {t} = {e['value']:.4g} [{e['low']:.4g}, {e['high']:.4g}] {e['unit']}"
                    f"{urad}{flag}")
+    diag = fit.get("diagnostics", {})
+    if diag.get("weights_settled") is False:
+        out.append(f"  note: the GLS weights cycled between two solutions for {diag['passes']} "
+                   "passes (terms that trade off at the longest taus, usually K and R); the "
+                   "likelier one is shown: a longer record separates them")
+    if diag.get("dispersion", 1.0) > 1.0:
+        out.append(f"  note: the five-term model misfits this Allan curve (gof p = "
+                   f"{diag['gof_p']:.2g}): every interval is widened by "
+                   f"{diag['dispersion'] ** 0.5:.2g}x; plot it (--report) before trusting it")
     prior = fit.get("prior")
     if prior:
         sheet = ", ".join(f"{t} {p['value']:.4g} {p['unit']} (90 % in "

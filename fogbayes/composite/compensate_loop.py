@@ -23,7 +23,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .._numba import numba
+from ..support.numba_cache import numba
 from .model import RESID_ABS, RESID_REL
 
 

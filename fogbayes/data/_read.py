@@ -220,7 +220,7 @@ def _scan_lines(body: bytes, quoted: bool, src: str, header_line: int):
 # -- Parquet ---------------------------------------------------------------------------
 def read_parquet(path: Path) -> Table:
     """Read a Parquet recording; metadata from the schema key ``fogbayes`` (a JSON object)."""
-    from .._optional import PARQUET, require
+    from ..support.extras import PARQUET, require
 
     pq = require("pyarrow.parquet", *PARQUET)
 

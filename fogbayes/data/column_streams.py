@@ -68,7 +68,7 @@ class _ParquetStream:
     """Parquet columns, re-cut from row-group batches into chunks of any size."""
 
     def __init__(self, path: Path, names: Sequence[str]):
-        from .._optional import PARQUET, require
+        from ..support.extras import PARQUET, require
 
         pq = require("pyarrow.parquet", *PARQUET)
 
@@ -181,7 +181,7 @@ def _scan_npy_dir(path: Path):
 
 
 def _scan_parquet(path: Path):
-    from .._optional import PARQUET, require
+    from ..support.extras import PARQUET, require
 
     pa = require("pyarrow", *PARQUET)
     pq = require("pyarrow.parquet", *PARQUET)

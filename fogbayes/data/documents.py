@@ -136,7 +136,7 @@ def validate_fit_document(doc: Any, source: str | None = None) -> dict:
     document of this schema version (or of an earlier, schema-less one); returns ``doc``.
 
     ``doc`` must hold plain JSON types (pass an in-memory document through
-    :func:`fogbayes._json.to_jsonable` first, as :func:`validate_in_memory` does).
+    :func:`fogbayes.support.jsonable.to_jsonable` first, as :func:`validate_in_memory` does).
     """
     v = _Checker(source)
     if not isinstance(doc, dict):
@@ -171,7 +171,7 @@ def validate_fit_document(doc: Any, source: str | None = None) -> dict:
 def validate_in_memory(doc: Any, source: str | None = None) -> None:
     """:func:`validate_fit_document` of a document as a workflow returns it (NumPy scalars,
     tuples): checked on its JSON form, as it would be written."""
-    from .._json import to_jsonable
+    from ..support.jsonable import to_jsonable
 
     validate_fit_document(to_jsonable(doc), source or "the fit document")
 

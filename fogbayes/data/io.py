@@ -239,7 +239,7 @@ def write_csv_mixed(path: str | Path, cols: dict[str, np.ndarray]) -> Path:
 
 # -- Parquet ---------------------------------------------------------------------------
 def _write_parquet(path: Path, cols: dict, meta: dict) -> None:
-    from .._optional import PARQUET, require
+    from ..support.extras import PARQUET, require
 
     pa = require("pyarrow", *PARQUET)
     pq = require("pyarrow.parquet", *PARQUET)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba
+from ..support.numba_cache import numba
 
 
 @numba.njit(cache=True)

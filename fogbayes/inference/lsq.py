@@ -27,7 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._lazy import lazy_module
+from ..support.lazy import lazy_module
 
 # JAX and optax load on first use: the NumPy path of a one-off fit (``fogbayes fit``) never
 # needs them (0.4 s of a CLI call).

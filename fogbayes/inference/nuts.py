@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import jax
 
-from .._lazy import host_device
+from ..support.lazy import host_device
 
 
 def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
@@ -65,7 +65,7 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
 
 
 def on_host(compiled):
-    """``compiled`` called on the CPU device (:func:`fogbayes._lazy.host_device`): NUTS
+    """``compiled`` called on the CPU device (:func:`fogbayes.support.lazy.host_device`): NUTS
     steps are small and sequential, and on an H100 machine the posteriors ran 2.6-3.1x
     slower on the GPU than on its CPU (benchmarks/RESULTS_gpu.md)."""
 

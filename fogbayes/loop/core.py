@@ -36,7 +36,7 @@ from ..diagnose.noise_prior import NoisePrior
 from ..diagnose.refine import polish, refine
 from ..diagnose.reml import with_reml
 from ..diagnose.scans import scan_unexplained
-from .._lazy import host_device
+from ..support.lazy import host_device
 from ..inference import noise_fit as nfit
 from ..thermal.workflow import DEFAULT_ORDERS
 from ._threads import single_thread_blas

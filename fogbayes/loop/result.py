@@ -22,7 +22,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .._json import to_jsonable
+from ..support.jsonable import to_jsonable
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
 from ..diagnose.noise_prior import NoisePrior

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._xp import namespace
+from ..support.xp import namespace
 
 from ..errors import ShapeError
 

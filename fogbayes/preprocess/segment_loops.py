@@ -2,7 +2,7 @@
 
 :func:`merge_runs` labels each sample by its smoothed rate (1 above ``threshold``, -1
 below ``-threshold``, else 0) and applies the merge rule of :mod:`.segments` to each row of
-a (sensors, n) rate array, sensors on all cores for a fleet (:func:`fogbayes._numba.over_rows`,
+a (sensors, n) rate array, sensors on all cores for a fleet (:func:`fogbayes.support.numba_cache.over_rows`,
 from 8 rows: below that a thread team's start would cost more than a row's work)::
 
     duration(run) = end[last sample] - t[first sample]     (end[i] = t[i + 1], last + median step)
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba, over_rows
+from ..support.numba_cache import numba, over_rows
 
 #: rows from which the loops run on all cores
 MIN_ROWS = 8

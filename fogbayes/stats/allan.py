@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .._lazy import jax_on_cpu
+from ..support.lazy import jax_on_cpu
 from ..errors import FogbayesError, TooShortError
 from .allan_blocked import allan_variance_fast
 from .allan_stencils import KINDS, static_counts

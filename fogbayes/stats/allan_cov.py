@@ -39,7 +39,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._xp import namespace
+from ..support.xp import namespace
 
 NOISE_TYPES = ("quantization", "white", "flicker", "rrw")
 _C = np.array([1.0, -2.0, 1.0])

@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba
+from ..support.numba_cache import numba
 
 __all__ = ["mod_hadamard_variance"]
 

@@ -17,13 +17,13 @@ the NaN test, so records without gaps pay nothing for it.
 
 Why compiled loops: NumPy needs one pass over the chunk per operation (about 0.6 ns per sample
 and level here); fused, the level costs one read of the two block sums and one write.
-``cache=True`` stores the machine code in the user's cache folder (:mod:`fogbayes._numba`),
+``cache=True`` stores the machine code in the user's cache folder (:mod:`fogbayes.support.numba_cache`),
 so only the first process pays the 1-2 s compilation. The steps release the GIL (``nogil``): sensors of a batch run on threads.
 """
 
 from __future__ import annotations
 
-from .._numba import numba
+from ..support.numba_cache import numba
 import numpy as np
 
 PIECE = 8192  # terms per compensated addition

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba
+from ..support.numba_cache import numba
 
 #: Cancellation guard: the d = 0 residual energy must keep at least this share of the
 #: centred energy for the one-pass sums to keep ~10 significant digits.

@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import numba
+from ..support.numba_cache import numba
 
 __all__ = ["mtotvar_sums", "phase_samples", "prefix2", "theo1_sums", "totvar_sums"]
 

@@ -77,7 +77,7 @@ class Sink:
             self._tmp = temp_path(self.path)
         try:
             if kind == "parquet":
-                from .._optional import PARQUET, require
+                from ..support.extras import PARQUET, require
 
                 pa = require("pyarrow", *PARQUET)
                 pq = require("pyarrow.parquet", *PARQUET)
@@ -105,7 +105,7 @@ class Sink:
 
     def write(self, **cols: np.ndarray) -> None:
         if self.kind == "parquet":
-            from .._optional import PARQUET, require
+            from ..support.extras import PARQUET, require
 
             pa = require("pyarrow", *PARQUET)
             arrays = [pa.array(np.asarray(cols[nm], dtype=self.columns[nm]))

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._lazy import jax_on_cpu, lazy_module
+from ..support.lazy import jax_on_cpu, lazy_module
 from .compensate_loops import compensate_into
 from ..models.polynomial import PolyBasis
 

@@ -20,7 +20,7 @@ import threading
 from collections.abc import Callable
 from functools import lru_cache
 
-from .._numba import numba
+from ..support.numba_cache import numba
 import numpy as np
 
 

@@ -22,7 +22,7 @@ from .._read import Table
 
 #: The body axes a log holds; ``axis`` picks one as the Recording's output.
 AXES = ("x", "y", "z")
-#: (extra, what needs it) for :func:`fogbayes._optional.require`.
+#: (extra, what needs it) for :func:`fogbayes.support.extras.require`.
 LOGS = ("logs", "Gyro logs (ULog, ROS bags, MCAP, DataFlash)")
 #: At most this many lines of what a library printed are kept in the metadata.
 _NOTES = 5
@@ -38,7 +38,7 @@ class LogSelectionError(MissingColumnError):
 
 def require(module: str):
     """Import a log library, or raise the one-line error naming the ``logs`` extra."""
-    from ..._optional import require as _require
+    from ...support.extras import require as _require
 
     return _require(module, *LOGS)
 

@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from numba.core import caching
 
-from ._config import fogbayes_cache_dir
+from .._config import fogbayes_cache_dir
 
 __all__ = ["fogbayes_cache_dir", "numba", "over_rows"]
 
