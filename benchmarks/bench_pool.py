@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 import fogbayes  # noqa: F401  (float64)
-from fogbayes.pool.allan import UnitFit, pool_allan
+from fogbayes.pool.allan import FLAG_LEVEL, pool_allan, unit_from_fit
 from fogbayes.simulate.noise import allan_noise
 
 FS = 10.0
@@ -43,9 +43,7 @@ def fit_record(y, name):
     from fogbayes.allan.fit import fit_range
 
     data, fit, left = fit_range(prepare(y, FS))
-    return UnitFit(name, None, y.size, FS, np.asarray(fit.info["logp"]),
-                   np.asarray(fit.info["cov_log"]), dict(fit.terms), left,
-                   float(fit.info["gof_p"]), bool(fit.converged))
+    return unit_from_fit(name, None, y.size, FS, data, fit, left)
 
 
 def unit_truth(rng):
@@ -63,7 +61,8 @@ def one_rep(rep, args):
     truths = [unit_truth(rng) for _ in range(args.units)]
     units = [fit_record(simulate(tr, n, seed=100_000 * rep + u), f"u{u}")
              for u, tr in enumerate(truths)]
-    doc = pool_allan(units, terms=TERMS, seed=rep, flag_level=args.flag_level)
+    doc = pool_allan(units, terms=TERMS, seed=rep, flag_level=args.flag_level,
+                     covariance_at=args.covariance_at, outlier_test=args.outlier_test)
     out = {"rep": rep, "converged": doc["converged"], "population": {}, "units": {}}
     for t in TERMS:
         p = doc["population"][t]
@@ -86,7 +85,8 @@ def one_rep(rep, args):
     bad = dict(truths[0])
     bad["K"] = bad["K"] * args.outlier_k
     units[0] = fit_record(simulate(bad, n, seed=100_000 * rep + 99_999), "u0")
-    doc2 = pool_allan(units, terms=TERMS, seed=rep, flag_level=args.flag_level)
+    doc2 = pool_allan(units, terms=TERMS, seed=rep, flag_level=args.flag_level,
+                     covariance_at=args.covariance_at, outlier_test=args.outlier_test)
     out["outlier_flagged"] = bool(doc2["units"][0]["outlier"]["flagged"])
     out["outlier_p"] = float(doc2["units"][0]["outlier"]["p"])
     out["false_flags_with_outlier"] = int(sum(u["outlier"]["flagged"] for u in doc2["units"][1:]))
@@ -126,8 +126,11 @@ def main():
     ap.add_argument("--first-rep", type=int, default=0)
     ap.add_argument("--units", type=int, default=20)
     ap.add_argument("--log2n", type=int, default=17)
-    ap.add_argument("--flag-level", type=float, default=0.01)
+    ap.add_argument("--flag-level", type=float, default=FLAG_LEVEL)
     ap.add_argument("--outlier-k", type=float, default=5.0)
+    ap.add_argument("--covariance-at", choices=("population", "estimate"), default="population",
+                    help="where each unit's covariance is evaluated (fogbayes.pool.allan.pool_allan)")
+    ap.add_argument("--outlier-test", choices=("each", "joint"), default="each")
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     rows, t0 = [], time.perf_counter()

@@ -129,6 +129,27 @@ def test_a_far_unit_is_flagged_by_an_exact_refit_and_the_others_are_not():
     assert lo < _dersimonian_laird(y[:, 0], cov[:, 0, 0])[0] < hi
 
 
+def test_each_term_outlier_p_is_the_bonferroni_of_two_sided_normal_tails():
+    """Fixed (mu, S), a diagonal unit covariance: the per-term p-value is 2 Phi(-|z_t|) with
+    z_t = (y_t - mu_t) / sqrt(s_t^2 + Sigma_tt), the unit's the smallest times P; the joint
+    one is the chi-square tail of sum z_t^2 (closed forms, scipy)."""
+    from scipy import stats
+
+    from fogbayes.pool.normal import _predictive_p
+
+    y, mu, s, sd = np.array([0.3, 2.0, -0.1]), np.zeros(3), np.array([0.2, 0.5, 0.1]), 0.1
+    cu = np.eye(3) * sd**2
+    D = 7
+    draws = np.broadcast_to(mu, (D, 3)), np.broadcast_to(s, (D, 3))
+    z = y / np.sqrt(s**2 + sd**2)
+    each = _predictive_p(y, cu, np.zeros(3), *draws, test="each")
+    assert each == pytest.approx(3 * np.min(2 * stats.norm.sf(np.abs(z))), rel=1e-12)
+    joint = _predictive_p(y, cu, np.zeros(3), *draws)
+    assert joint == pytest.approx(stats.chi2.sf(np.sum(z**2), 3), rel=1e-12)
+    # one term far off, the others at the centre: judged alone it stands out more
+    assert each < joint
+
+
 def test_a_datasheet_prior_moves_the_population_median_by_its_weight():
     """A tight sheet (sd 0.01 in log) pins mu near the sheet value; a loose one (sd 3) leaves
     it where the units put it. Same fleet shape as the other tests (one compilation)."""

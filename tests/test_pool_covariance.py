@@ -84,3 +84,28 @@ def test_the_pool_warns_of_a_unit_whose_five_term_fit_fails():
     assert check_units([good, good], ("N",)) == []
     (msg,) = check_units([good, bad], ("N",))
     assert "u7 (p = 3e-42)" in msg and "does not describe" in msg
+
+
+def test_at_population_takes_each_units_covariance_at_the_population_median():
+    """The second pool's covariances (fogbayes.pool.allan.at_population): at the unit's own
+    estimate they are its fit's; at a lower B, B dominates fewer taus and its log-space
+    variance grows (the direction that removes the weights' lean towards high estimates);
+    a unit without its data is left as it is."""
+    import sys
+    from pathlib import Path
+
+    from fogbayes.pool.allan import at_population
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    import bench_pool as bp
+
+    unit = bp.fit_record(bp.simulate(bp.POP, 2 ** 15, seed=7), "u0")
+    own = {t: unit.terms[t].value for t in ("N", "B")}
+    (same,) = at_population([unit], ("N", "B"), own)
+    np.testing.assert_allclose(same.cov, unit.cov, rtol=1e-9, atol=1e-14)
+    (low,) = at_population([unit], ("B",), {"B": own["B"] / 2})
+    b = TERMS.index("B")
+    assert low.cov[b, b] > 1.2 * unit.cov[b, b]
+    assert np.array_equal(low.logp, unit.logp)  # the estimate itself does not move
+    bare = unit._replace(data=None, fit=None)
+    assert at_population([bare], ("B",), {"B": own["B"] / 2})[0] is bare

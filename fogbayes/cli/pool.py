@@ -73,8 +73,9 @@ def pool(
                                 "of the pooled coefficients a_k of (T - T_ref)^k."),
     terms: str = typer.Option("N,B,K", help="Noise terms to pool (of Q, N, B, K, R)."),
     report: Path = typer.Option(None, "--report", help="Also write the HTML pool report."),
-    flag_level: float = typer.Option(0.01, help="Flag a unit whose leave-one-out "
-                                     "p-value against the population is below this."),
+    flag_level: float = typer.Option(None, help="Flag a unit whose leave-one-out "
+                                     "p-value against the population is below this "
+                                     "[default: allan 0.02, bias-t 0.01]."),
     seed: int = typer.Option(0, help="Seed of the sampler."),
     prior: Path = typer.Option(None, "--prior", help="Datasheet prior (from 'fogbayes "
                                "prior'): where the typical unit's terms lie, how loosely."),
@@ -115,6 +116,11 @@ def pool(
         raise ArgumentError(f"--terms {terms!r}: " + (f"'{bad[0]}' is not a noise term" if bad
                                                       else "name each term once"),
                             column="--terms", fix="give some of Q, N, B, K, R, e.g. N,B,K")
+    if flag_level is None:
+        from ..pool.allan import FLAG_LEVEL as ALLAN_LEVEL
+        from ..pool.thermal import FLAG_LEVEL as THERMAL_LEVEL
+
+        flag_level = THERMAL_LEVEL if model == "bias-t" else ALLAN_LEVEL
     if not 0.0 < flag_level < 1.0:
         raise ArgumentError(f"--flag-level is {flag_level:g}; it must lie in (0, 1)",
                             column="--flag-level", fix="e.g. --flag-level 0.01")

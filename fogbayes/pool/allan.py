@@ -8,7 +8,10 @@ goodness of fit fails). The pooled terms (default N, B, K; Q and R on request) a
 modelled as a population (:mod:`fogbayes.pool.normal`): log N, log B, log K of the units
 are normal about a population mean with a between-unit spread. The resolved unpooled terms
 are marginalised (the sub-block of :math:`\Sigma_u`); every unresolved term, pooled or not,
-is conditioned on (:func:`resolved_covariance`).
+is conditioned on (:func:`resolved_covariance`). The pool runs twice: the second time
+each unit's covariance is taken at the first pool's population median instead of at the
+unit's own estimate (:func:`at_population`: at its own estimate a unit's weight follows its
+error, and the population median leaned high).
 
 What it reports, per pooled term (90 % intervals):
 
@@ -33,7 +36,10 @@ from ..allan.model import TERMS, UNITS
 SCHEMA = "fogbayes.pool/1"
 DEFAULT_TERMS = ("N", "B", "K")
 CI = 0.9
-FLAG_LEVEL = 0.01
+#: a unit is flagged when its outlier p-value is below this. 0.02 spends under half of a 5 %
+#: false-flag budget (measured 1.2 % of clean units at 0.02, 0.45 % at 0.01, on 100 fleets of
+#: benchmarks/bench_pool.py) for detection (a unit with one term 5x its own: 94 % against 90 %)
+FLAG_LEVEL = 0.02
 
 
 class UnitFit(NamedTuple):
@@ -49,6 +55,8 @@ class UnitFit(NamedTuple):
     taus_left_out: int
     gof_p: float
     converged: bool
+    data: object = None     # the AllanFitData the fit used (None: no re-evaluation)
+    fit: object = None      # its AllanFit
 
 
 def fit_unit(rec, *, name: str | None = None) -> UnitFit:
@@ -67,9 +75,47 @@ def fit_unit(rec, *, name: str | None = None) -> UnitFit:
                               column="output", fix="check the column (a stuck or disconnected "
                               "sensor?), or leave this recording out of the pool")
     data, fit, left_out = fit_range(prepare(y, fs))
-    return UnitFit(name or rec.meta.sensor_id, rec.meta.source, int(y.size), fs,
-                   np.asarray(fit.info["logp"]), np.asarray(fit.info["cov_log"]),
-                   dict(fit.terms), left_out, float(fit.info["gof_p"]), bool(fit.converged))
+    return unit_from_fit(name or rec.meta.sensor_id, rec.meta.source, int(y.size), fs, data,
+                         fit, left_out)
+
+
+def unit_from_fit(name, source, n, fs, data, fit, left_out) -> UnitFit:
+    """A :class:`UnitFit` of a :func:`fogbayes.allan.fit.fit_range` result."""
+    return UnitFit(name, source, n, fs, np.asarray(fit.info["logp"]),
+                   np.asarray(fit.info["cov_log"]), dict(fit.terms), left_out,
+                   float(fit.info["gof_p"]), bool(fit.converged), data, fit)
+
+
+def at_population(units: Sequence[UnitFit], terms: Sequence[str], median: dict) -> list[UnitFit]:
+    r"""The units with their covariance re-evaluated where the population puts them.
+
+    A unit's GLS covariance is evaluated at its own estimate, where a term estimated high
+    dominates more taus and gets a smaller log-space variance: across a fleet the weights
+    follow the errors, and the precision-weighted population median leans high (B by
+    +0.014 in log, se 0.0012, on the 200 fleets of ``benchmarks/bench_pool.py``; the plain
+    mean of the units is unbiased). Under the population model the unit's sampling
+    covariance is that at its true parameters, which the population median estimates
+    without that correlation; so each pooled term is set to the population ``median``
+    (the unit's other terms stay at its estimate) and the covariance is taken there
+    (:func:`fogbayes.allan.fit.log_covariance_at`; same kept taus, same dispersion). The
+    outlier test keeps each unit's own covariance: a unit far from the population is
+    better described there, and taken at the population median a unit with 5x the K got
+    a wider K and was flagged in 31 of 40 fleets instead of 35 (level 0.02,
+    ``benchmarks/RESULTS_pool.md``). Units
+    without their fit's data are returned unchanged.
+    """
+    from ..allan.fit import log_covariance_at
+
+    out = []
+    for u in units:
+        if u.data is None or u.fit is None:
+            out.append(u)
+            continue
+        at = np.array(u.logp, dtype=float)
+        for t in terms:
+            at[TERMS.index(t)] = np.log(median[t])
+        out.append(u._replace(cov=log_covariance_at(u.fit, u.data, at)))
+    return out
 
 
 def resolved_covariance(unit: UnitFit) -> np.ndarray:
@@ -147,19 +193,61 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
 
 
 def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS,
-               seed: int = 0, flag_level: float = FLAG_LEVEL, prior=None, **sampler) -> dict:
+               seed: int = 0, flag_level: float = FLAG_LEVEL, prior=None,
+               covariance_at: str = "population", outlier_test: str = "each",
+               **sampler) -> dict:
     """Pool the units' five-term fits; a JSON-able document (module docstring).
 
     ``prior``: a datasheet prior (:mod:`fogbayes.inference.datasheet`; document, path or
     object): the population median of each pooled term the sheet gives is log-normal about
-    the sheet value within its looseness; the others keep the weak default."""
+    the sheet value within its looseness; the others keep the weak default.
+    ``covariance_at``: ``"population"`` pools twice, the second time with each unit's
+    covariance taken at the first pool's population median (:func:`at_population`; units
+    that carry their data); ``"estimate"`` once, with the covariances as the units' own fits
+    give them. ``outlier_test``: ``"each"`` pooled term judged alone, or ``"joint"``
+    (:func:`fogbayes.pool.normal.fit_pool`)."""
     from ..inference.datasheet import as_prior
-    from .normal import MU_PRIOR_SD, fit_pool
 
     terms = tuple(t for t in TERMS if t in terms)
+    prior = as_prior(prior)
+    if covariance_at not in ("population", "estimate") or outlier_test not in ("each", "joint"):
+        from ..errors import ArgumentError
+
+        raise ArgumentError(f"covariance_at {covariance_at!r} / outlier_test {outlier_test!r}",
+                            fix="covariance_at: 'population' or 'estimate'; outlier_test: "
+                                "'each' or 'joint'")
+    sampler = {**sampler, "outlier_test": outlier_test}
+    first = None
+    if covariance_at == "population" and any(u.data is not None for u in units):
+        first, _ = _pool(units, terms, seed, flag_level, prior, sampler, outliers=False)
+        median = {t: float(np.exp(np.median(first.mu[:, j]))) for j, t in enumerate(terms)}
+        own = _covariances(units, terms)
+        units = at_population(units, terms, median)
+        res, sheet = _pool(units, terms, seed, flag_level, prior, sampler, test_cov=own)
+    else:
+        res, sheet = _pool(units, terms, seed, flag_level, prior, sampler)
+    doc = _document(units, terms, res, sheet, prior, flag_level,
+                    None if first is None else first.mu)
+    doc["diagnostics"]["outlier_test"] = outlier_test
+    return doc
+
+
+def _covariances(units, terms) -> np.ndarray:
+    """(U, P, P) the units' covariances of the pooled terms as the pool takes them."""
+    idx = [TERMS.index(t) for t in terms]
+    return np.stack([resolved_covariance(u)[np.ix_(idx, idx)] for u in units])
+
+
+def _pool(units, terms, seed, flag_level, prior, sampler, outliers=True, test_cov=None):
+    """The arrays of the units' pooled terms and one :func:`fogbayes.pool.normal.fit_pool`.
+
+    ``test_cov``: the covariances the outlier test takes for the unit under test (the units'
+    own, :func:`pool_allan`); None: those of the model."""
+    from .normal import MU_PRIOR_SD, fit_pool
+
     idx = [TERMS.index(t) for t in terms]
     y = np.stack([u.logp[idx] for u in units])
-    cov = np.stack([resolved_covariance(u)[np.ix_(idx, idx)] for u in units])
+    cov = _covariances(units, terms)
     # a term a unit does not resolve is an upper limit: flat below its estimate, falling
     # off above it over the width of its interval's upper side (fogbayes.pool.normal)
     cens = np.array([[u.terms[t].low <= 0.0 for t in terms] for u in units], dtype=float)
@@ -168,7 +256,6 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
             if cens[i, j]:
                 e = u.terms[t]
                 cov[i, j, j] = max(np.log(e.high / e.value) / Z90, 0.05) ** 2
-    prior = as_prior(prior)
     mu_prior, sheet = None, {}
     if prior is not None:
         sheet = {t: prior.terms[t] for t in terms if t in prior.terms}
@@ -176,7 +263,11 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
                               for j, t in enumerate(terms)]),
                     np.array([sheet[t].sd_log if t in sheet else MU_PRIOR_SD for t in terms]))
     res = fit_pool(y, cov, terms, censored=cens, seed=seed, flag_level=flag_level,
-                   mu_prior=mu_prior, **sampler)
+                   mu_prior=mu_prior, outliers=outliers, test_cov=test_cov, **sampler)
+    return res, sheet
+
+
+def _document(units, terms, res, sheet, prior, flag_level, first_mu) -> dict:
     population = {}
     for j, t in enumerate(terms):
         lo, hi = np.exp(np.quantile(res.new_unit[:, j], [0.5 - CI / 2, 0.5 + CI / 2]))
@@ -198,6 +289,12 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
                      "outlier": {"p": p, "flagged": bool(p < flag_level),
                                  "method": res.diagnostics["loo_method"][i]}})
     diag = {k: v for k, v in res.diagnostics.items() if k != "loo_method"}
+    reevaluated = first_mu is not None
+    diag["covariance_at"] = "population median of a first pool" if reevaluated else \
+        "each unit's own estimate"
+    if reevaluated:
+        diag["first_pool_median"] = {t: float(np.exp(np.median(first_mu[:, j])))
+                                     for j, t in enumerate(terms)}
     flagged = [r["name"] for r in rows if r["outlier"]["flagged"]]
     return {"terms": list(terms), "ci": CI, "flag_level": flag_level,
             "population": population, "units": rows, "flagged": flagged,
@@ -210,7 +307,9 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
             "method": "hierarchical normal model of the units' log-space GLS estimates "
                       "(fogbayes.pool.normal): NUTS on the population mean and spread, unit "
                       "parameters integrated out exactly and drawn given each posterior draw; "
-                      "outliers by the leave-one-out posterior-predictive p-value"}
+                      "outliers by the leave-one-out posterior-predictive p-value of each "
+                      "pooled term (two-sided; the smallest times their number), or of all "
+                      "jointly (diagnostics.outlier_test)"}
 
 
 def pool_document(pools: dict[str, dict], *, model: str = "allan") -> dict:
