@@ -43,7 +43,7 @@ def summary_lines(doc: dict) -> list[str]:
     if diag.get("dispersion", 1.0) > 1.0:
         out.append(f"  note: the five-term model misfits this Allan curve (gof p = "
                    f"{diag['gof_p']:.2g}): every interval is widened by "
-                   f"{diag['dispersion'] ** 0.5:.2g}x; plot it (--report) before trusting it")
+                   f"{diag['dispersion'] ** 0.5:.2g}x; plot it (--plot) before trusting it")
     prior = fit.get("prior")
     if prior:
         sheet = ", ".join(f"{t} {p['value']:.4g} {p['unit']} (90 % in "

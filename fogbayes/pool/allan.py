@@ -184,7 +184,7 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
         out.append(f"the five-term model does not describe the Allan curve of "
                    f"{', '.join(misfit)}, even with its shortest taus left out: every interval "
                    f"of such a unit is widened by sqrt(chi2/dof), so it enters the pool with "
-                   f"little weight; plot its ADEV (fogbayes allan --report) before trusting it")
+                   f"little weight; plot its ADEV (fogbayes allan --plot) before trusting it")
     rates = sorted({u.fs for u in units})
     if len(rates) > 1:
         out.append(f"the units were sampled at different rates ({', '.join(f'{r:g}' for r in rates)} "

@@ -32,7 +32,7 @@ from .._config import fogbayes_cache_dir
 
 __all__ = ["fogbayes_cache_dir", "numba", "over_rows"]
 
-_PACKAGE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parent.parent  # fogbayes/, this file is in support/
 
 # Numba renamed its locators (``_UserProvidedCacheLocator`` -> ``UserProvidedCacheLocator``).
 _Base = getattr(caching, "UserProvidedCacheLocator", None) or caching._UserProvidedCacheLocator
