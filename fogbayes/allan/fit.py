@@ -263,7 +263,7 @@ def log_covariance_at(fit: AllanFit, data: AllanFitData, logp) -> np.ndarray:
 
 
 def _reweighted(logp, mask, data, keep, log_obs, passes):
-    """Iterated GLS: minimise under the weights at the current estimate, recompute them there.
+    r"""Iterated GLS: minimise under the weights at the current estimate, recompute them there.
 
     ``passes`` passes as a rule, more (up to MAX_PASSES) while the estimate still moves: the
     weights depend on the parameters and the iteration can cycle when two terms trade off
