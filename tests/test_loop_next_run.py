@@ -117,6 +117,34 @@ def test_newer_or_broken_loop_documents_are_one_line_exit_2(runs, capsys):
     assert len(_one_line(err := capsys.readouterr().err)) == 1 and "'.csv'" in err
 
 
+@pytest.mark.parametrize("command", ["report", "batch", "export"])
+def test_every_reader_refuses_a_newer_loop_document_in_one_line(runs, command, capsys,
+                                                                tmp_path):
+    # compensate is checked above; the other commands that read a calibration document
+    # must refuse the same way (exit 2, one line naming the file and why), not fail later
+    # on a field they do not know
+    d, _, _ = runs
+    doc = json.loads((d / "loop.json").read_text())
+    doc["schema"] = "fogbayes.loop/2"
+    bad = _write(tmp_path, "newer.json", doc)
+    args = {"report": ["report", str(d / "b.csv"), "--fit", bad, "--out", str(tmp_path / "r.html")],
+            "batch": ["batch", str(_folder_with(tmp_path, d / "b.csv")), "-m", "bias-t",
+                      "--task", "compensate", "--params", bad, "--out", str(tmp_path / "out")],
+            "export": ["export", bad, "-f", "px4", "--out", str(tmp_path / "x.params")]}[command]
+    capsys.readouterr()
+    assert cli.main(["-q", *args]) == 2
+    lines = _one_line(capsys.readouterr().err)
+    assert len(lines) == 1 and "newer.json" in lines[0] and "newer" in lines[0], lines
+    assert not list(tmp_path.glob("r.html")) and not list(tmp_path.glob("x.params"))
+
+
+def _folder_with(tmp_path, recording):
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    (folder / recording.name).write_bytes(recording.read_bytes())
+    return folder
+
+
 def test_report_applies_the_loop_calibration_to_the_next_run(runs):
     d, _, _ = runs
     assert cli.main(["-q", "report", str(d / "b.csv"), "--fit", str(d / "loop.json"),
