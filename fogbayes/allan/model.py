@@ -34,16 +34,16 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+# the term names, document units and ADEV floor / B live below the families (the datasheet
+# prior of fogbayes.inference uses them too); offered here as before
+from ..models.allan_terms import BI_FACTOR, TERMS, UNITS  # noqa: F401
 from ..support.xp import namespace
 
-TERMS = ("Q", "N", "B", "K", "R")
-UNITS = {"Q": "arcsec", "N": "deg/sqrt(h)", "B": "deg/h", "K": "deg/h^1.5", "R": "deg/h^2"}
 #: log-log slope of the deviation sigma(tau) for each term
 SLOPES = {"Q": -1.0, "N": -0.5, "B": 0.0, "K": 0.5, "R": 1.0}
 #: exponent n of tau in each variance term
 POWERS = {"Q": -2, "N": -1, "B": 0, "K": 1, "R": 2}
 ARCSEC_IN_URAD = math.pi / (180.0 * 3600.0) * 1e6
-BI_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)  # 0.6643: ADEV floor = BI_FACTOR * B
 #: variance coefficient a_n (sigma^2 = sum a_n tau^n) per squared canonical parameter
 _A_PER_P2 = {"Q": 3.0, "N": 3600.0, "B": 2.0 * math.log(2.0) / math.pi,
              "K": 1.0 / (3.0 * 3600.0), "R": 1.0 / (2.0 * 3600.0**2)}

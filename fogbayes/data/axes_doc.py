@@ -9,17 +9,19 @@ recording and writes::
 Each entry is a complete fit document of the model (:data:`fogbayes.data.doc_rules.FIT_SCHEMA`),
 checked as one: a reader that wants a single axis takes ``doc["axes"][name]`` and has what
 ``fogbayes allan`` writes for that axis alone.
+
+The reader checks every axis as a fit document
+(:func:`fogbayes.data.documents.validate_axes_document`): this module is the format, and
+the fit-document reader imports it, not the other way round.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from .doc_rules import FitDocumentError
-
 AXES_SCHEMA_NAME = "fogbayes.axes"
 AXES_SCHEMA = f"{AXES_SCHEMA_NAME}/1"
-_KEYS = {"schema", "model", "fogbayes_version", "source", "axes"}
+AXES_KEYS = {"schema", "model", "fogbayes_version", "source", "axes"}
 
 
 def is_axes_document(doc: Any) -> bool:
@@ -36,35 +38,6 @@ def axes_document(docs: dict[str, dict], *, source: str | None) -> dict:
         raise ValueError(f"axes of one document must share a model, got {sorted(models)}")
     return {"schema": AXES_SCHEMA, "model": models.pop(), "fogbayes_version": __version__,
             "source": source, "axes": dict(docs)}
-
-
-def validate_axes_document(doc: dict, source: str | None = None) -> dict:
-    """Raise a :class:`FitDocumentError` naming ``source`` and the key unless every axis is a
-    valid fit document of the document's model; returns ``doc``."""
-    from .documents import validate_fit_document
-
-    if doc.get("schema") != AXES_SCHEMA:
-        raise FitDocumentError(f"schema {doc.get('schema')!r} is not one this fogbayes reads "
-                               f"({AXES_SCHEMA})", file=source, column="schema",
-                               fix="upgrade fogbayes, or write the document again")
-    unknown = sorted(set(doc) - _KEYS)
-    if unknown:
-        raise FitDocumentError(f"unknown key {unknown[0]!r} in a multi-axis document",
-                               file=source, column=unknown[0],
-                               fix="pass the document fogbayes wrote, unchanged")
-    axes = doc.get("axes")
-    if not isinstance(axes, dict) or not axes:
-        raise FitDocumentError("'axes' must map each axis name to its fit document",
-                               file=source, column="axes",
-                               fix="pass the document fogbayes wrote, unchanged")
-    for name, sub in axes.items():
-        validate_fit_document(sub, f"{source}[axes.{name}]")
-        if sub.get("model") != doc.get("model"):
-            raise FitDocumentError(f"axis {name!r} holds a {sub.get('model')!r} fit in a "
-                                   f"{doc.get('model')!r} document", file=source,
-                                   column=f"axes.{name}.model",
-                                   fix="pass the document fogbayes wrote, unchanged")
-    return doc
 
 
 def per_axis(doc: dict, source: str | None = None) -> list[tuple[str | None, dict, str | None]]:

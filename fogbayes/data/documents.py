@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import UnitError
+from .axes_doc import AXES_KEYS, AXES_SCHEMA, is_axes_document
 from .doc_models import _allan, _arma, _check_schema, _scan, check_basis
 from .doc_rules import (
     COMPENSATING,
@@ -80,7 +81,7 @@ def _resolve(check):
 
 __all__ = ["COMPENSATING", "FIT_SCHEMA", "FitDocumentError", "agreed_unit", "check_basis",
            "check_channels", "declared_unit", "read_calibration", "read_fit_document",
-           "validate_fit_document", "validate_in_memory"]
+           "validate_axes_document", "validate_fit_document", "validate_in_memory"]
 
 
 # -- reading ----------------------------------------------------------------------------
@@ -120,14 +121,40 @@ def read_calibration(path: str | Path) -> dict:
     Loop documents are checked by :func:`fogbayes.loop.calibration_doc.validate_loop_document`
     (their ``calibration`` must be applicable); anything else as a fit document.
     """
-    from .axes_doc import is_axes_document, validate_axes_document
-
     doc = _load(path)
     if is_loop_document(doc):  # the validator (and the loop package) only when needed
         return _resolve(LOOP_CHECK)(doc, str(path))
     if is_axes_document(doc):  # one fit document per axis (fogbayes allan --axis all)
         return validate_axes_document(doc, str(path))
     validate_fit_document(doc, str(path))
+    return doc
+
+
+def validate_axes_document(doc: dict, source: str | None = None) -> dict:
+    """Raise a :class:`FitDocumentError` naming ``source`` and the key unless every axis is a
+    valid fit document of the document's model (a multi-axis document,
+    :mod:`fogbayes.data.axes_doc`); returns ``doc``."""
+    if doc.get("schema") != AXES_SCHEMA:
+        raise FitDocumentError(f"schema {doc.get('schema')!r} is not one this fogbayes reads "
+                               f"({AXES_SCHEMA})", file=source, column="schema",
+                               fix="upgrade fogbayes, or write the document again")
+    unknown = sorted(set(doc) - AXES_KEYS)
+    if unknown:
+        raise FitDocumentError(f"unknown key {unknown[0]!r} in a multi-axis document",
+                               file=source, column=unknown[0],
+                               fix="pass the document fogbayes wrote, unchanged")
+    axes = doc.get("axes")
+    if not isinstance(axes, dict) or not axes:
+        raise FitDocumentError("'axes' must map each axis name to its fit document",
+                               file=source, column="axes",
+                               fix="pass the document fogbayes wrote, unchanged")
+    for name, sub in axes.items():
+        validate_fit_document(sub, f"{source}[axes.{name}]")
+        if sub.get("model") != doc.get("model"):
+            raise FitDocumentError(f"axis {name!r} holds a {sub.get('model')!r} fit in a "
+                                   f"{doc.get('model')!r} document", file=source,
+                                   column=f"axes.{name}.model",
+                                   fix="pass the document fogbayes wrote, unchanged")
     return doc
 
 

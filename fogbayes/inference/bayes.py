@@ -9,7 +9,7 @@ Model (on standardised data, y' = (y - mean y) / sd y; results mapped back)::
                          theta = pacf_to_ar(s), s_k ~ Uniform(-1, 1) (invertible)
     sigma ~ HalfNormal(1)
 
-The ARMA likelihood is the exact Gaussian one of :func:`fogbayes.arma.model.arma_loglik`
+The ARMA likelihood is the exact Gaussian one of :func:`fogbayes.models.arma.arma_loglik`
 (closed form for AR(p), Kalman filter otherwise). Why it matters: gyro residuals are
 coloured (bias instability, Markov noise); assuming white noise treats n correlated block
 means as independent and gives intervals too narrow by about sqrt((1 + phi)/(1 - phi)) for
@@ -37,7 +37,7 @@ from .nuts import chain_sampler, on_host
 from .convergence import converged, ess_floor
 
 from ..errors import FogbayesError
-from ..arma.model import arma_loglik, pacf_to_ar
+from ..models.arma import arma_loglik, pacf_to_ar
 from ..models.statespace import arma_state_space, kalman_filter
 
 

@@ -49,7 +49,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import FogbayesError, UnitError
-from ..allan.model import BI_FACTOR, TERMS, UNITS
+from ..models.allan_terms import BI_FACTOR, TERMS, UNITS
 
 SCHEMA_NAME = "fogbayes.prior"
 SCHEMA_VERSION = 1

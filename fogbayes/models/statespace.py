@@ -93,7 +93,7 @@ def stationary_cov(T: Array, Q: Array) -> Array:
 
     r is small (<= 4 for the paper's models), so the r^2 x r^2 solve is cheap and, unlike
     a doubling iteration, exact and smoothly differentiable. Non-stationary T gives a
-    singular or indefinite system: callers keep |PACF| < 1 (see :mod:`fogbayes.arma.model`).
+    singular or indefinite system: callers keep |PACF| < 1 (see :mod:`fogbayes.models.arma`).
     """
     r = T.shape[0]
     A = jnp.eye(r * r) - jnp.kron(T, T)

@@ -32,6 +32,7 @@ import numpy as np
 from ..support.lazy import jax_on_cpu
 from ..errors import FogbayesError, TooShortError
 from .allan_blocked import allan_variance_fast
+from .allan_result import AllanDeviation  # the result (total.py returns it too)
 from .allan_stencils import KINDS, static_counts
 from .edf import chi2_interval, edf_for_kind
 from .noise_id import identify_alphas
@@ -42,27 +43,6 @@ from .taus import cluster_sizes
 #: beside the variance computation (below it, the thread's start costs more than it saves).
 PARALLEL_NOISE_ID = 1 << 18
 _NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-noise-id")
-
-
-class AllanDeviation(NamedTuple):
-    """Deviations at each tau (arrays of length ``len(tau)``, or (batch, len(tau)))."""
-
-    kind: str            # oadev, adev, mdev, ohdev, hdev, tdev
-    fs: float            # Hz
-    tau: np.ndarray      # s
-    m: np.ndarray        # cluster sizes (samples)
-    var: np.ndarray      # variance, input unit squared
-    dev: np.ndarray      # deviation, input unit
-    n_terms: np.ndarray  # terms averaged (after excluding gap-affected ones)
-    excluded: np.ndarray  # terms dropped because they touch a NaN gap
-    alpha: np.ndarray    # identified power-law exponent of the rate PSD
-    edf: np.ndarray      # equivalent degrees of freedom (Greenhall, for alpha)
-    dev_low: np.ndarray  # chi-square interval of the deviation at confidence ``ci``
-    dev_high: np.ndarray
-    ci: float
-    n: int               # samples (NaN included)
-    n_missing: int       # NaN samples
-    note: str            # how gaps were handled
 
 
 def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_decade: int = 20,

@@ -1,6 +1,6 @@
 r"""Total deviations TOTDEV, MTOTDEV, TTOTDEV and Theo1 with EDF and chi-square intervals.
 
-:func:`total_deviation` returns the same :class:`~fogbayes.stats.allan.AllanDeviation`
+:func:`total_deviation` returns the same :class:`~fogbayes.stats.allan_result.AllanDeviation`
 record as :func:`~fogbayes.stats.allan.allan_deviation` (which dispatches these kinds
 here). Rate samples :math:`y_0 \dots y_{n-1}` at ``fs``, ``tau0 = 1/fs``, phase
 :math:`x_k = \tau_0 \sum_{j<k} y_j` (``N = n + 1`` points), averaging factor ``m``.
@@ -56,6 +56,7 @@ import math
 import numpy as np
 
 from ..errors import FogbayesError, TooShortError
+from .allan_result import AllanDeviation
 from .edf import chi2_interval
 from .edf_total import edf_for_total_kind, theo1_bias_ratio, totvar_bias_ratio
 from .noise_id import identify_alphas
@@ -177,7 +178,7 @@ def total_deviation(y, fs: float, *, taus="octave", kind: str = "totdev", ci: fl
             for MTOTDEV/TTOTDEV (refused).
 
     Returns:
-        :class:`~fogbayes.stats.allan.AllanDeviation` (``excluded`` zeros, ``n_missing`` 0).
+        :class:`~fogbayes.stats.allan_result.AllanDeviation` (``excluded`` zeros, ``n_missing`` 0).
 
     Example:
         >>> y = np.random.default_rng(0).normal(size=4096)    # white FM, 1 Hz
@@ -188,8 +189,6 @@ def total_deviation(y, fs: float, *, taus="octave", kind: str = "totdev", ci: fl
         >>> r.tau.tolist()
         [6.0, 12.0]
     """
-    from .allan import AllanDeviation  # here: allan imports this module lazily
-
     if kind not in KINDS:
         raise FogbayesError(f"unknown total deviation '{kind}'", fix=f"use one of {', '.join(KINDS)}")
     if kind == "ttotdev":  # TTOT var = tau^2 MTOT var / 3: the modified total variance, rescaled
