@@ -94,7 +94,10 @@ def fit_one(args) -> dict:
 
 
 def plan_one(args) -> dict:
-    """Plan from one pilot; hours of the point plan and of the range (None = refused)."""
+    """Plan from one pilot; hours of the point plan and of the range (None = refused), and
+    the width the true noise gives at the point plan's and the range's long end's length
+    (predicted_width at the truth, which records of that length achieve to within 0.3
+    points: section 2 of RESULTS_plan.md)."""
     mix, seed, term, prec = args
     y, fs = pilot(mix, seed)
     t0 = time.perf_counter()
@@ -103,7 +106,12 @@ def plan_one(args) -> dict:
     except PlanError as exc:
         return {"mix": mix, "seed": seed, "term": term, "refused": str(exc),
                 "seconds": time.perf_counter() - t0}
+    truth = AllanParams(**MIXES[mix][1])
+    at_truth = {k: None if n is None else predicted_width(truth, fs, n, term, level=LEVEL,
+                                                          terms=("Q", "N", "B", "K"))
+                for k, n in (("plan", pp.plan.n), ("range_high", pp.range.n_high))}
     return {"mix": mix, "seed": seed, "term": term, "refused": None, "n": pp.plan.n,
+            "width_at_truth": at_truth,
             "hours": pp.plan.hours, "range": list(pp.range_hours), "model": list(pp.terms),
             "range_n": [pp.range.n_low, pp.range.n_high],
             "pilot": {t: list(e[:3]) for t, e in pp.fit.terms.items()},
@@ -129,7 +137,9 @@ def fmt_h(h) -> str:
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--records", type=int, default=50)
+    ap.add_argument("--records", type=int, default=50,
+                    help="records per planned length (0: plans only, sections 1 and 3)")
+    ap.add_argument("--targets", default="K,N,B", help="which of K, N, B to plan for")
     ap.add_argument("--pilots", type=int, default=20)
     ap.add_argument("--mixes", default="A,B")
     ap.add_argument("--workers", type=int, default=2)
@@ -137,6 +147,7 @@ def main():
     args = ap.parse_args()
     t_start = time.perf_counter()
     mixes = args.mixes.split(",")
+    targets = [tp for tp in TARGETS if tp[0] in args.targets.split(",")]
     # spawn, not fork: JAX's threads in the parent would make forked workers deadlock-prone
     pool = ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn"))
     print(f"# bench_plan: {platform.machine()}, {os.cpu_count()} cores, workers "
@@ -146,7 +157,7 @@ def main():
     heads, jobs = [], []
     for mix in mixes:
         fs, truth = MIXES[mix]
-        for term, prec in TARGETS:
+        for term, prec in targets:
             head = plan_one((mix, 0, term, prec))
             tp = plan_length(AllanParams(**truth), fs, term, prec, level=LEVEL,
                              terms=("Q", "N", "B", "K"))
@@ -169,7 +180,7 @@ def main():
                                                  for i in range(args.records)]))
     futures = [(key, [pool.submit(fit_one, a) for a in batch]) for key, batch in jobs]
     pilot_jobs = [pool.submit(plan_one, (mix, s, term, prec)) for mix in mixes
-                  for term, prec in TARGETS for s in range(args.pilots)]
+                  for term, prec in targets for s in range(args.pilots)]
     results = {key: [f.result() for f in fs_] for key, fs_ in futures}
     pilots = [f.result() for f in pilot_jobs]
     pool.shutdown()
@@ -190,8 +201,27 @@ def main():
             print(f"| {h['mix']} | {t} +-{h['prec']:.0%} | not resolved | refused | - | "
                   f"{h['truth_hours']:.3g} | - |")
 
+    summary = []
+    if args.records:
+        summary = achieved(heads, results, args.records)
+    pilots_table(pilots, heads, mixes, targets, args.pilots)
+    total = time.perf_counter() - t_start
+    rec_s = [r["seconds"] for rows in results.values() for r in rows] or [0.0]
+    plan_s = [p["seconds"] for p in pilots]
+    print(f"\n{len(results) and sum(map(len, results.values()))} records (mean "
+          f"{np.mean(rec_s):.1f} s each: simulate, prepare, 2 fits), "
+          f"{len(pilots)} pilot plans (mean {np.mean(plan_s):.1f} s, max {np.max(plan_s):.1f} s); "
+          f"total {total:.0f} s wall")
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump({"heads": heads, "summary": summary, "pilots": pilots,
+                       "records": {"|".join(k): v for k, v in results.items()}}, f)
+
+
+def achieved(heads, results, records) -> list[dict]:
+    """Section 2: the widths records of the planned lengths achieve."""
     print("\n## Achieved on simulated records of the planned length "
-          f"({args.records} records each, seeds {RECORD_SEED0}-{RECORD_SEED0 + args.records - 1})\n")
+          f"({records} records each, seeds {RECORD_SEED0}-{RECORD_SEED0 + records - 1})\n")
     print("width = (high - low) / (2 value) = sinh(1.645 se_log); within = share of records "
           "with |estimate / truth - 1| <= target; cover = truth inside the fit's 90 % interval\n")
     print("| mix | target | length | h | predicted width at truth | plan model: width median / "
@@ -209,20 +239,27 @@ def main():
                   f"{h['predicted_at_truth'][kind]:.2%} | {a['median']:.2%} / {a['mean']:.2%} "
                   f"({a['p10']:.1%}-{a['p90']:.1%}) | {a['coverage']:.0%} | {a['within']:.0%} | "
                   f"{b['median']:.2%} / {b['mean']:.2%} | {b['coverage']:.0%} | {b['low0']} |")
+    return summary
 
-    print(f"\n## How the plan varies with the pilot ({args.pilots} pilots of 1 h, seeds 0-"
-          f"{args.pilots - 1})\n")
+
+def pilots_table(pilots, heads, mixes, targets, n_pilots) -> None:
+    """Section 3: how the plan varies with the pilot."""
+    print(f"\n## How the plan varies with the pilot ({n_pilots} pilots of 1 h, seeds 0-"
+          f"{n_pilots - 1})\n")
     print("| mix | target | refused | point plan h: median (min - max) | joint range covers "
-          "the truth plan | median range h | one-at-a-time ends cover it |")
-    print("|---|---|---|---|---|---|---|")
+          "the truth plan | median range h | one-at-a-time ends cover it | width the truth "
+          "gives at the point plan: median (10-90 %) | share within target +-30 % | the same "
+          "at the range's long end |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for mix in mixes:
-        for term, prec in TARGETS:
+        for term, prec in targets:
             sel = [p for p in pilots if p["mix"] == mix and p["term"] == term]
             ok = [p for p in sel if p["refused"] is None]
             truth_h = next(h["truth_hours"] for h in heads
                            if h["mix"] == mix and h["term"] == term)
             if not ok:
-                print(f"| {mix} | {term} +-{prec:.0%} | {len(sel)} of {len(sel)} | - | - | - | - |")
+                print(f"| {mix} | {term} +-{prec:.0%} | {len(sel)} of {len(sel)} | - | - | - | - "
+                      "| - | - | - |")
                 continue
             hs = np.array([p["hours"] for p in ok])
             cover = np.mean([p["range"][0] <= truth_h <= p["range"][1] for p in ok])
@@ -232,19 +269,17 @@ def main():
             cover1 = np.mean([min(e) <= truth_h <= max(e) for e in ends])
             lo = np.median([p["range"][0] for p in ok])
             hi = np.median([p["range"][1] for p in ok])
+            cols = []
+            for k in ("plan", "range_high"):  # the done-when's band: target +- 3 points of 10
+                w = np.array([math.inf if p["width_at_truth"][k] is None
+                              else p["width_at_truth"][k] for p in ok])
+                band = np.mean(np.abs(w / prec - 1.0) <= 0.3)
+                cols.append(f"{np.median(w):.2%} ({np.quantile(w, 0.1):.1%}-"
+                            f"{np.quantile(w, 0.9):.1%})" + (f" | {band:.0%}" if k == "plan" else ""))
             print(f"| {mix} | {term} +-{prec:.0%} | {len(sel) - len(ok)} of {len(sel)} | "
                   f"{np.median(hs):.3g} ({hs.min():.3g} - {hs.max():.3g}) | "
-                  f"{cover:.0%} ({len(ok)}) | {fmt_h(lo)} - {fmt_h(hi)} | {cover1:.0%} |")
-    total = time.perf_counter() - t_start
-    rec_s = [r["seconds"] for rows in results.values() for r in rows]
-    plan_s = [p["seconds"] for p in pilots]
-    print(f"\n{len(rec_s)} records (mean {np.mean(rec_s):.1f} s each: simulate, prepare, 2 fits), "
-          f"{len(pilots)} pilot plans (mean {np.mean(plan_s):.1f} s, max {np.max(plan_s):.1f} s); "
-          f"total {total:.0f} s wall")
-    if args.out:
-        with open(args.out, "w") as f:
-            json.dump({"heads": heads, "summary": summary, "pilots": pilots,
-                       "records": {"|".join(k): v for k, v in results.items()}}, f)
+                  f"{cover:.0%} ({len(ok)}) | {fmt_h(lo)} - {fmt_h(hi)} | {cover1:.0%} | "
+                  + " | ".join(cols) + " |")
 
 
 if __name__ == "__main__":
