@@ -13,7 +13,10 @@ for three choices of the unit covariance Sigma_u:
 * ``conditional``: the resolved terms' covariance conditioned on the censored ones;
 * ``diagonal``: the variances alone;
 * ``conditional on Q-R too``: conditioned on every unresolved term of the five-term fit,
-  the unpooled Q and R included.
+  the unpooled Q and R included;
+* ``the same at the population``: as the previous, with the covariance evaluated where the
+  population median puts N, B, K (:func:`fogbayes.pool.allan.at_population`, what the
+  pool's second pass uses), here the simulator's medians.
 
 Printed: RMS log error of N, B, K per choice, for all units and for the units whose K is
 censored, and the units with the widest N intervals against their actual N error.
@@ -31,13 +34,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_pool as bp  # noqa: E402  (the fleets, the same seeds)
 from fogbayes.pool.allan import TERMS as ALL  # noqa: E402
+from fogbayes.pool.allan import at_population, resolved_covariance  # noqa: E402
 
 NBK = ("N", "B", "K")
 
 
 def fleet_fits(reps: int):
     idx = [ALL.index(t) for t in NBK]
-    Y, C, T, cens, full = [], [], [], [], []
+    Y, C, T, cens, full, at_pop = [], [], [], [], [], []
     for rep in range(reps):
         rng = np.random.default_rng(10_000 + rep)
         truths = [bp.unit_truth(rng) for _ in range(20)]
@@ -50,7 +54,8 @@ def fleet_fits(reps: int):
             # every term's covariance and resolution (Q and R too: not pooled, but N trades
             # with Q at short taus)
             full.append((f.cov, np.array([f.terms[t].low <= 0 for t in ALL])))
-    return np.array(Y), np.array(C), np.array(T), np.array(cens), full
+            at_pop.append(resolved_covariance(at_population([f], NBK, bp.POP)[0])[np.ix_(idx, idx)])
+    return np.array(Y), np.array(C), np.array(T), np.array(cens), full, np.array(at_pop)
 
 
 def conditional_on_all(cov5, cen5):
@@ -84,7 +89,7 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=10)
     ap.add_argument("--json", default=None)
     args = ap.parse_args(argv)
-    Y, C, T, cens, full = fleet_fits(args.reps)
+    Y, C, T, cens, full, C_pop = fleet_fits(args.reps)
     C_all = np.array([conditional_on_all(c5, k5) for c5, k5 in full])
     mu = np.log([bp.POP[t] for t in NBK])
     S = np.diag(np.array([bp.SPREAD[t] for t in NBK]) ** 2)
@@ -97,12 +102,15 @@ def main(argv=None):
                                   for y, c, cen in zip(Y[mask], C[mask], cens[mask])])
         rows["conditional on Q-R too"] = np.array(
             [mu + S @ np.linalg.solve(S + c, y - mu) for y, c in zip(Y[mask], C_all[mask])])
+        rows["the same at the population"] = np.array(
+            [mu + S @ np.linalg.solve(S + c, y - mu) for y, c in zip(Y[mask], C_pop[mask])])
         for how, est in rows.items():
             rms = np.sqrt(np.mean((est - T[mask]) ** 2, axis=0))
             out["rms"][f"{group}: {how}"] = dict(zip(NBK, rms.round(4).tolist()))
             print(f"{group:10s} {how:22s} RMS log error N {rms[0]:.4f} B {rms[1]:.4f} "
                   f"K {rms[2]:.4f}  ({mask.sum()} units)")
-    for name, cov in (("marginal", C), ("conditional on Q-R too", C_all)):
+    for name, cov in (("marginal", C), ("conditional on Q-R too", C_all),
+                      ("the same at the population", C_pop)):
         z = (Y - T) / np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
         res = ~cens
         zr = [float(np.sqrt(np.mean(z[res[:, j], j] ** 2))) for j in range(3)]

@@ -303,3 +303,24 @@ def test_unit_names_stay_apart_across_folders_and_a_file_named_twice_is_refused(
     assert recording_paths([tmp_path / "a", tmp_path / "b"]) == paths
     with pytest.raises(FileFormatError, match="named twice"):
         recording_paths([paths[0], tmp_path / "a"])
+
+
+def test_a_unit_is_drawn_with_its_own_covariance_and_the_population_is_unchanged():
+    # fogbayes.pool.allan gives the population the units' covariances at the population
+    # median and each unit its own (test_cov) where it is taken alone: its shrunk draws
+    y, cov, _ = _fleet(10, [0.0, 1.0], [0.2, 0.3], [0.05, 0.1], seed=7)
+    own = cov.copy()
+    own[0] *= 16.0  # unit 0 is 4x less precise than the population pass takes it
+    a = fit_pool(y, cov, ("a", "b"), seed=3, outliers=False)
+    b = fit_pool(y, cov, ("a", "b"), seed=3, outliers=False, test_cov=own)
+    np.testing.assert_array_equal(a.mu, b.mu)  # the population pass is the same
+    np.testing.assert_array_equal(a.units[:, 1:], b.units[:, 1:])  # other units untouched
+    # unit 0's draws: the conjugate normal update with its own covariance, draw by draw
+    S = b.spread**2
+    mean = b.mu + S / (S + np.diag(own[0])) * (y[0] - b.mu)
+    sd = np.sqrt(S - S**2 / (S + np.diag(own[0])))
+    z = (b.units[:, 0] - mean) / sd
+    assert abs(z.mean()) < 0.1 and abs(z.std() - 1.0) < 0.05  # 4000 draws: se 0.016 / 0.011
+    # and it is shrunk further toward the population than with the pool's covariance
+    assert np.all(np.abs(np.median(b.units[:, 0], 0) - np.median(b.mu, 0))
+                  < np.abs(np.median(a.units[:, 0], 0) - np.median(a.mu, 0)))

@@ -98,11 +98,13 @@ def at_population(units: Sequence[UnitFit], terms: Sequence[str], median: dict) 
     covariance is that at its true parameters, which the population median estimates
     without that correlation; so each pooled term is set to the population ``median``
     (the unit's other terms stay at its estimate) and the covariance is taken there
-    (:func:`fogbayes.allan.fit.log_covariance_at`; same kept taus, same dispersion). The
-    outlier test keeps each unit's own covariance: a unit far from the population is
-    better described there, and taken at the population median a unit with 5x the K got
-    a wider K and was flagged in 31 of 40 fleets instead of 35 (level 0.02,
-    ``benchmarks/RESULTS_pool.md``). Units
+    (:func:`fogbayes.allan.fit.log_covariance_at`; same kept taus, same dispersion). Where a
+    unit is taken alone -- its outlier test and its shrunk draws given the population --
+    it keeps its own covariance: a unit far from the population is better described
+    there. Taken at the population median, a unit with 5x the K got a wider K and was
+    flagged in 31 of 40 fleets instead of 35 (level 0.02), and the units' errors over
+    their sds had RMS N 0.97, B 1.23, K 0.83 against 0.95, 1.01, 1.04 at their own
+    estimates (200 units, ``benchmarks/pool_allan_units.py``; ``benchmarks/RESULTS_pool.md``). Units
     without their fit's data are returned unchanged.
     """
     from ..allan.fit import log_covariance_at
@@ -242,8 +244,8 @@ def _covariances(units, terms) -> np.ndarray:
 def _pool(units, terms, seed, flag_level, prior, sampler, outliers=True, test_cov=None):
     """The arrays of the units' pooled terms and one :func:`fogbayes.pool.normal.fit_pool`.
 
-    ``test_cov``: the covariances the outlier test takes for the unit under test (the units'
-    own, :func:`pool_allan`); None: those of the model."""
+    ``test_cov``: the covariances taken where a unit is alone -- its outlier test and its
+    shrunk draws (the units' own, :func:`pool_allan`); None: those of the model."""
     from .normal import MU_PRIOR_SD, fit_pool
 
     idx = [TERMS.index(t) for t in terms]

@@ -271,8 +271,9 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     ``outliers=False`` skips the leave-one-out p-values (NaN). ``outlier_test``: ``"joint"``
     (chi-square of all resolved components) or ``"each"`` (each component alone; module
     docstring). ``test_cov`` (U, P, P): the covariance of each unit's resolved components
-    in its own outlier test, when it differs from ``cov`` (the pool's model); censored
-    components keep ``cov``'s width.
+    where the unit is taken alone -- its outlier test and its shrunk draws given the
+    population -- when it differs from ``cov`` (the pool's model of the population);
+    censored components keep ``cov``'s width.
 
     Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
     ArviZ); a unit whose Pareto k exceeds PARETO_K_MAX or whose p-value lies within
@@ -309,7 +310,7 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     mu, spread, diagnostics = run(np.ones(U), key=key)
     if not outliers:
         diagnostics.update(pareto_k=[], loo_method=["none"] * U, refits=0, refits_converged=0)
-        units = shrink(y, cov, mu, spread, rng, cens)
+        units = shrink(y, tcov, mu, spread, rng, cens)
         new_unit = mu + spread * rng.standard_normal(mu.shape)
         return PoolResult(tuple(names), mu, spread, units, new_unit, np.full(U, np.nan),
                           diagnostics)
@@ -334,6 +335,6 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
         outlier_p[u] = p
     diagnostics.update(pareto_k=k_hat.tolist(), loo_method=method, refits=len(refits),
                        refits_converged=int(sum(refits)))
-    units = shrink(y, cov, mu, spread, rng, cens)
+    units = shrink(y, tcov, mu, spread, rng, cens)
     new_unit = mu + spread * rng.standard_normal(mu.shape)
     return PoolResult(tuple(names), mu, spread, units, new_unit, outlier_p, diagnostics)
