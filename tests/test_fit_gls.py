@@ -50,6 +50,22 @@ def test_fit_gls_gives_the_coefficients_of_the_loop_with_no_step(both):
     assert not any("worse than" in w for w in fit.get("warnings", []))
 
 
+def test_bias_t_at_the_fits_default_order_is_the_loop_at_that_order(record):
+    # `fogbayes fit -m bias-t --estimator gls` takes the fit's default order (3); the loop
+    # given the same order and no step writes the same coefficients
+    d, _ = record
+    assert cli.main(["-q", "fit", str(d / "rec.csv"), "-m", "bias-t", "--estimator", "gls",
+                     "--json", str(d / "fit_bt.json")]) == 0
+    assert cli.main(["-q", "loop", str(d / "rec.csv"), "-m", "bias-t", "--orders", "3",
+                     "--max-steps", "0", "--json", str(d / "loop_bt.json"),
+                     "--compensated", str(d / "loop_bt.csv")]) == 0
+    a, b = (json.loads((d / n).read_text())["calibration"] for n in ("fit_bt.json", "loop_bt.json"))
+    assert a["terms"] == b["terms"]
+    assert [(t["kind"], t["params"].get("powers")) for t in a["terms"]] == [
+        ("intercept", None), ("tpoly", [1, 2, 3])]
+    np.testing.assert_allclose(a["coefficients"], b["coefficients"], rtol=1e-8, atol=0)
+
+
 def test_compensate_reads_the_gls_fit_like_the_loop_writes_it(record, both):
     d, rec = record
     rc = cli.main(["-q", "compensate", str(d / "rec.csv"), "--params", str(d / "fit.json"),
