@@ -27,8 +27,9 @@ from fogbayes.allan.fit import fit_range
 
 
 def main():
-    mix = sys.argv[1]; seeds = range(int(sys.argv[2]), int(sys.argv[3]))
-    fs, truth = bp.MIXES[mix]; tp = AllanParams(**truth)
+    mix = sys.argv[1]
+    seeds = range(int(sys.argv[2]), int(sys.argv[3]))
+    truth = AllanParams(**bp.MIXES[mix][1])
     D = 64
     for seed in seeds:
         y, fs = bp.pilot(mix, seed)
@@ -37,27 +38,27 @@ def main():
         except PlanError:
             continue
         t0 = time.time()
-        fit = pp.fit; model = pp.terms
-        full = prepare(y, fs); data, _, _ = fit_range(full, TERMS)
-        # the data the pilot fit used: tau >= pp.tau_min
+        fit, model = pp.fit, pp.terms
+        data, _, _ = fit_range(prepare(y, fs), TERMS)  # the octaves the pilot fit kept
         cov = log_cov(fit.params, data, model)[1] * fit.info["dispersion"]
-        p = np.array(fit.params, float); on = np.array([t in model for t in TERMS])
+        p = np.array(fit.params, float)
+        on = np.array([t in model for t in TERMS])
         rng = np.random.default_rng(seed)
         L = np.linalg.cholesky(cov + 1e-15 * np.eye(cov.shape[0]))
         th = np.log(p[on])[None] + rng.standard_normal((D, on.sum())) @ L.T
-        draws = []
-        for d in range(D):
-            q = p.copy(); q[on] = np.exp(th[d]); draws.append(q)
+        draws = [np.where(on, 0.0, p) for _ in range(D)]
+        for q, t in zip(draws, th):
+            q[on] = np.exp(t)
         def mean_w(n, how):
             w = np.array([half_width(predicted_se(q, fs, n, model, tau_min=pp.tau_min)["K"], 0.9) for q in draws])
             return float(np.mean(w) if how == "mean" else np.median(w))
         out = {"seed": seed, "point_n": pp.plan.n,
-               "point_w_truth": predicted_width(tp, fs, pp.plan.n, "K", level=0.9, terms=("Q","N","B","K"))}
-        n_lo = shortest_record(fs, model, pp.tau_min); n_max = int(30 * 86400 * fs)
+               "point_w_truth": predicted_width(truth, fs, pp.plan.n, "K", level=0.9, terms=("Q","N","B","K"))}
+        n_lo, n_max = shortest_record(fs, model, pp.tau_min), int(30 * 86400 * fs)
         for how in ("mean", "median"):
             n, _ = search_length(lambda k: se_for_width(mean_w(k, how), 0.9), se_for_width(0.10, 0.9), n_lo, n_max)
             out[how + "_n"] = n
-            out[how + "_w_truth"] = None if n is None else predicted_width(tp, fs, n, "K", level=0.9, terms=("Q","N","B","K"))
+            out[how + "_w_truth"] = None if n is None else predicted_width(truth, fs, n, "K", level=0.9, terms=("Q","N","B","K"))
         out["s"] = time.time() - t0
         print(json.dumps(out), flush=True)
 

@@ -307,12 +307,12 @@ def test_unit_names_stay_apart_across_folders_and_a_file_named_twice_is_refused(
 
 def test_a_unit_is_drawn_with_its_own_covariance_and_the_population_is_unchanged():
     # fogbayes.pool.allan gives the population the units' covariances at the population
-    # median and each unit its own (test_cov) where it is taken alone: its shrunk draws
+    # median and each unit its own (unit_cov) where it is taken alone: its shrunk draws
     y, cov, _ = _fleet(10, [0.0, 1.0], [0.2, 0.3], [0.05, 0.1], seed=7)
     own = cov.copy()
     own[0] *= 16.0  # unit 0 is 4x less precise than the population pass takes it
     a = fit_pool(y, cov, ("a", "b"), seed=3, outliers=False)
-    b = fit_pool(y, cov, ("a", "b"), seed=3, outliers=False, test_cov=own)
+    b = fit_pool(y, cov, ("a", "b"), seed=3, outliers=False, unit_cov=own)
     np.testing.assert_array_equal(a.mu, b.mu)  # the population pass is the same
     np.testing.assert_array_equal(a.units[:, 1:], b.units[:, 1:])  # other units untouched
     # unit 0's draws: the conjugate normal update with its own covariance, draw by draw

@@ -91,15 +91,16 @@ def test_at_population_takes_each_units_covariance_at_the_population_median():
     estimate they are its fit's; at a lower B, B dominates fewer taus and its log-space
     variance grows (the direction that removes the weights' lean towards high estimates);
     a unit without its data is left as it is."""
-    import sys
-    from pathlib import Path
+    from fogbayes.allan.data import prepare
+    from fogbayes.allan.fit import fit_range
+    from fogbayes.pool.allan import at_population, unit_from_fit
+    from fogbayes.simulate.noise import allan_noise
 
-    from fogbayes.pool.allan import at_population
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    import bench_pool as bp
-
-    unit = bp.fit_record(bp.simulate(bp.POP, 2 ** 15, seed=7), "u0")
+    # a unit of benchmarks/bench_pool.py's fleets (a tactical FOG at 10 Hz), 55 min; the
+    # flicker drawn over 4x the record, as there
+    n, fs = 2 ** 15, 10.0
+    y = allan_noise(4 * n, fs, seed=7, Q=0.19, N=0.01, B=0.165, K=0.66)[:n]
+    unit = unit_from_fit("u0", None, n, fs, *fit_range(prepare(y, fs)))
     own = {t: unit.terms[t].value for t in ("N", "B")}
     (same,) = at_population([unit], ("N", "B"), own)
     np.testing.assert_allclose(same.cov, unit.cov, rtol=1e-9, atol=1e-14)

@@ -226,7 +226,7 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
         median = {t: float(np.exp(np.median(first.mu[:, j]))) for j, t in enumerate(terms)}
         own = _covariances(units, terms)
         units = at_population(units, terms, median)
-        res, sheet = _pool(units, terms, seed, flag_level, prior, sampler, test_cov=own)
+        res, sheet = _pool(units, terms, seed, flag_level, prior, sampler, unit_cov=own)
     else:
         res, sheet = _pool(units, terms, seed, flag_level, prior, sampler)
     doc = _document(units, terms, res, sheet, prior, flag_level,
@@ -241,10 +241,10 @@ def _covariances(units, terms) -> np.ndarray:
     return np.stack([resolved_covariance(u)[np.ix_(idx, idx)] for u in units])
 
 
-def _pool(units, terms, seed, flag_level, prior, sampler, outliers=True, test_cov=None):
+def _pool(units, terms, seed, flag_level, prior, sampler, outliers=True, unit_cov=None):
     """The arrays of the units' pooled terms and one :func:`fogbayes.pool.normal.fit_pool`.
 
-    ``test_cov``: the covariances taken where a unit is alone -- its outlier test and its
+    ``unit_cov``: the covariances taken where a unit is alone -- its outlier test and its
     shrunk draws (the units' own, :func:`pool_allan`); None: those of the model."""
     from .normal import MU_PRIOR_SD, fit_pool
 
@@ -266,7 +266,7 @@ def _pool(units, terms, seed, flag_level, prior, sampler, outliers=True, test_co
                               for j, t in enumerate(terms)]),
                     np.array([sheet[t].sd_log if t in sheet else MU_PRIOR_SD for t in terms]))
     res = fit_pool(y, cov, terms, censored=cens, seed=seed, flag_level=flag_level,
-                   mu_prior=mu_prior, outliers=outliers, test_cov=test_cov, **sampler)
+                   mu_prior=mu_prior, outliers=outliers, unit_cov=unit_cov, **sampler)
     return res, sheet
 
 

@@ -260,7 +260,7 @@ REFIT_FACTOR = 10.0
 
 
 def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float = 0.01,
-             mu_prior=None, outliers: bool = True, outlier_test: str = "joint", test_cov=None,
+             mu_prior=None, outliers: bool = True, outlier_test: str = "joint", unit_cov=None,
              num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 4) -> PoolResult:
     """Posterior of the population model (module docstring) from estimates ``y`` (U, P) with
     covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
@@ -270,7 +270,7 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     ``mu_prior``: ``(mean (P,), sd (P,))`` of the normal prior on mu (a datasheet), or None.
     ``outliers=False`` skips the leave-one-out p-values (NaN). ``outlier_test``: ``"joint"``
     (chi-square of all resolved components) or ``"each"`` (each component alone; module
-    docstring). ``test_cov`` (U, P, P): the covariance of each unit's resolved components
+    docstring). ``unit_cov`` (U, P, P): the covariance of each unit's resolved components
     where the unit is taken alone -- its outlier test and its shrunk draws given the
     population -- when it differs from ``cov`` (the pool's model of the population);
     censored components keep ``cov``'s width.
@@ -295,8 +295,8 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     cens = np.zeros((U, P)) if censored is None else np.asarray(censored, dtype=float)
     r = 1.0 - cens
     cov = cov * r[:, :, None] * r[:, None, :] + np.eye(P) * (cens * np.diagonal(cov, axis1=1, axis2=2))[:, None, :]
-    tcov = cov if test_cov is None else (
-        np.asarray(test_cov, dtype=float) * r[:, :, None] * r[:, None, :]
+    ucov = cov if unit_cov is None else (
+        np.asarray(unit_cov, dtype=float) * r[:, :, None] * r[:, None, :]
         + np.eye(P) * (cens * np.diagonal(cov, axis1=1, axis2=2))[:, None, :])
     rng = np.random.default_rng(seed)
     centre, z0 = _start(y, cov, num_chains, rng)
@@ -310,7 +310,7 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     mu, spread, diagnostics = run(np.ones(U), key=key)
     if not outliers:
         diagnostics.update(pareto_k=[], loo_method=["none"] * U, refits=0, refits_converged=0)
-        units = shrink(y, tcov, mu, spread, rng, cens)
+        units = shrink(y, ucov, mu, spread, rng, cens)
         new_unit = mu + spread * rng.standard_normal(mu.shape)
         return PoolResult(tuple(names), mu, spread, units, new_unit, np.full(U, np.nan),
                           diagnostics)
@@ -322,12 +322,12 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     outlier_p, method = np.empty(U), []
     refits = []
     for u in range(U):
-        p = _predictive_p(y[u], tcov[u], cens[u], mu, spread, log_w[u], outlier_test)
+        p = _predictive_p(y[u], ucov[u], cens[u], mu, spread, log_w[u], outlier_test)
         if k_hat[u] > PARETO_K_MAX or p < REFIT_FACTOR * flag_level:
             w = np.ones(U)
             w[u] = 0.0
             mu_u, s_u, diag_u = run(w, key=jax.random.fold_in(key, u + 1))
-            p = _predictive_p(y[u], tcov[u], cens[u], mu_u, s_u, test=outlier_test)
+            p = _predictive_p(y[u], ucov[u], cens[u], mu_u, s_u, test=outlier_test)
             refits.append(diag_u["converged"])
             method.append("refit")
         else:
@@ -335,6 +335,6 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
         outlier_p[u] = p
     diagnostics.update(pareto_k=k_hat.tolist(), loo_method=method, refits=len(refits),
                        refits_converged=int(sum(refits)))
-    units = shrink(y, tcov, mu, spread, rng, cens)
+    units = shrink(y, ucov, mu, spread, rng, cens)
     new_unit = mu + spread * rng.standard_normal(mu.shape)
     return PoolResult(tuple(names), mu, spread, units, new_unit, outlier_p, diagnostics)
