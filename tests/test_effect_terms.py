@@ -38,17 +38,19 @@ CLOSED = {  # name -> closed form of the effect at its full parameters
     "scale_factor_asymmetry": lambda c, p: fx.scale_factor_asymmetry(c.input_rate, **p),
     "scale_factor_temperature": lambda c, p: fx.scale_factor_temperature(c.input_rate,
                                                                          c.temperature, **p),
+    "paper004": lambda c, p: fx.paper004_bias(c.temperature, c.dTdt, **p),
 }
 #: non-default parameters, so that every coefficient path is exercised
 PARAMS = {"time_drift": {"slope": 0.3, "amplitude": 0.8, "tau": 900.0},
           "periodic": {"amplitude": 0.2, "frequency": 1 / 300.0, "phase": 0.7},
           "temperature_order": {"coeffs": [0.5, 0.01, 2e-4, -3e-6], "T_ref": 15.0},
-          "thermal_lag": {"coeff": 0.02, "tau": 700.0, "T_ref": 10.0}}
+          "thermal_lag": {"coeff": 0.02, "tau": 700.0, "T_ref": 10.0},
+          "paper004": {"c": [0.3, 0.03, 6e-4], "d": [4.0, -0.5], "cross": 0.02, "T_ref": 5.0}}
 
 
 def test_every_loop_effect_is_planted_through_term_kinds():
     have = {n for n, s in EFFECTS.items() if s.terms is not None}
-    assert have == set(CLOSED)  # markov_noise (stochastic) and paper004 (its closed form) aside
+    assert have == set(CLOSED)  # markov_noise (stochastic) aside
 
 
 @pytest.mark.parametrize("name", sorted(CLOSED))

@@ -10,6 +10,7 @@ or an effect the simulator plants -- is a :class:`~fogbayes.diagnose.terms.Term`
     tpoly         ((T_c - centre) / scale)^k, k in powers            (bias polynomial)
     rate          (dT/dt) / scale                                    (Shupe, deg C/min)
     rate_poly     ((dT/dt) / scale)^k                                (paper 004 rate terms)
+    t_rate        ((T_c - centre) / scale) (dT/dt) / rate_scale      (paper 004 cross term)
     gradient      (T_b - T_a) / scale                                (two channels)
     hysteresis    tanh((dT/dt) / r0)                                 (+heating / -cooling)
     play          (T_c - P_w[T_c]) / (w / 2), P_w the play operator     (memory hysteresis)
@@ -133,6 +134,17 @@ class RatePoly(Kind):
 
     def labels(self, p):
         return [f"(dT/dt)'^{e}" for e in p["powers"]]
+
+
+class TRate(Kind):
+    name = "t_rate"
+    needs = {"channel": "int", "centre": "num", "scale": "pos", "rate_scale": "pos"}
+
+    def columns(self, p, cov):
+        return (_z(cov, p) * cov.Tdot / p["rate_scale"])[:, None]
+
+    def labels(self, p):
+        return ["T' (dT/dt)'"]
 
 
 class Gradient(Kind):
@@ -316,7 +328,7 @@ class DriftTPoly(Kind):
 
 
 KINDS: dict[str, Kind] = {k.name: k() for k in (
-    Intercept, TPoly, Rate, RatePoly, Gradient, Hysteresis, Play, Lag, DriftLin, DriftExp, Periodic,
+    Intercept, TPoly, Rate, RatePoly, TRate, Gradient, Hysteresis, Play, Lag, DriftLin, DriftExp, Periodic,
     Step, OmegaPoly, OmegaAbs, OmegaTPoly, DriftTPoly)}
 
 

@@ -9,8 +9,8 @@ Every effect the loop can find is planted through the loop's own term kinds
 (:mod:`fogbayes.diagnose.kinds`): ``EffectSpec.terms(params)`` gives (term, coefficients)
 pairs in physical units, e.g. the Shupe term k dT/dt is ``(rate{scale: 1}, [k])``, so truth
 and model share one definition of each column. Their closed forms
-(:mod:`fogbayes.simulate.effects`) are the independent reference the tests compare with.
-Paper 004's bias is its paper's closed form.
+(:mod:`fogbayes.simulate.effects`) are the independent reference the tests compare with,
+paper 004's bias (:func:`~fogbayes.simulate.effects.paper004_bias`) among them.
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ import numpy as np
 
 from ..diagnose.covariates import Covariates as TermCovariates
 from ..diagnose.terms import Term, design
-from . import effects as fx
 from ._checks import SimulationParameterError
 from .truth import Covariates
 
@@ -76,6 +75,14 @@ def _drift(p: dict) -> Planted:  # s t / 3600 + A (1 - exp(-t / tau))
     return [(Term("drift_lin", {"duration": 3600.0}), [p["slope"]]),
             (Term("intercept", {}), [p["amplitude"]]),
             (Term("drift_exp", {"tau": p["tau"]}), [-p["amplitude"]])]
+
+
+def _paper004(p: dict) -> Planted:  # c0 + c1 x + c2 x^2 + d1 r + d2 r^2 + e x r
+    x = {"channel": 0, "centre": p["T_ref"], "scale": 1.0}
+    return [(Term("tpoly", {**x, "powers": list(range(len(p["c"])))}), list(p["c"])),
+            (Term("rate_poly", {"powers": list(range(1, len(p["d"]) + 1)), "scale": 1.0}),
+             list(p["d"])),
+            (Term("t_rate", {**x, "rate_scale": 1.0}), [p["cross"]])]
 
 
 def _omega(cov: Covariates, name: str) -> np.ndarray:
@@ -143,9 +150,8 @@ EFFECTS: dict[str, EffectSpec] = {
     "markov_noise": EffectSpec(
         None, {"sigma": 0.05, "tau_c": 300.0},
         "first-order Gauss-Markov noise, std sigma deg/h, correlation time tau_c s"),
-    "paper004": EffectSpec(
-        lambda c, p: fx.paper004_bias(c.temperature, c.dTdt, **p),
-        {"c": [0.0, 0.0, 0.0], "d": [0.0, 0.0], "cross": 0.0, "T_ref": 0.0},
+    "paper004": _effect(
+        _paper004, {"c": [0.0, 0.0, 0.0], "d": [0.0, 0.0], "cross": 0.0, "T_ref": 0.0},
         "paper 004 bias: order-2 polynomial in T and dT/dt (+ cross term) (deg/h)"),
 }
 
