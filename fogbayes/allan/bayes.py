@@ -292,11 +292,11 @@ OBVIOUS_SHARE = 0.25
 
 
 def _loo(post: AllanPosterior):
-    import arviz as az
+    from ..inference.compare import information, loglik_idata
 
-    idata = az.from_dict(posterior={"logp": post.draws.reshape(post.log_lik.shape[:2] + (5,))},
-                         log_likelihood={"avar": post.log_lik})
-    return az.loo(idata, pointwise=True), az.waic(idata, pointwise=True)
+    idata = loglik_idata(post.log_lik, name="avar",
+                         posterior={"logp": post.draws.reshape(post.log_lik.shape[:2] + (5,))})
+    return information(idata, "loo"), information(idata, "waic")
 
 
 def _obvious(post: AllanPosterior) -> np.ndarray:
@@ -309,12 +309,13 @@ def _obvious(post: AllanPosterior) -> np.ndarray:
 
 def _compare(post_a: AllanPosterior, post_b: AllanPosterior) -> dict:
     """elpd(a) - elpd(b) by PSIS-LOO (pointwise se) and WAIC."""
+    from ..inference.compare import difference
+
     loo_a, waic_a = _loo(post_a)
     loo_b, waic_b = _loo(post_b)
-    diff = np.asarray(loo_a.loo_i) - np.asarray(loo_b.loo_i)
-    return {"d_elpd_loo": float(diff.sum()), "se": float(np.sqrt(diff.size * np.var(diff))),
-            "d_elpd_waic": float(waic_a.elpd_waic - waic_b.elpd_waic),
-            "pareto_k_max": float(max(np.max(loo_a.pareto_k), np.max(loo_b.pareto_k)))}
+    d, se = difference(loo_a, loo_b)
+    return {"d_elpd_loo": d, "se": se, "d_elpd_waic": waic_a.elpd - waic_b.elpd,
+            "pareto_k_max": max(loo_a.pareto_k_max, loo_b.pareto_k_max)}
 
 
 def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,

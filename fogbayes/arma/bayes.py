@@ -187,8 +187,9 @@ class BayesComparison(NamedTuple):
 
 def compare_orders_bayes(x, candidates, *, seed: int, num_warmup: int = 500,
                          num_samples: int = 500, num_chains: int = 2) -> BayesComparison:
-    """WAIC and LOO (az.waic / az.loo, ArviZ 0.23) for each candidate order (best: max ELPD)."""
-    import arviz as az
+    """WAIC and LOO (ArviZ 0.23 by :mod:`fogbayes.inference.compare`) for each candidate
+    order (best: max ELPD)."""
+    from ..inference.compare import information
 
     orders = tuple((int(p), int(q)) for p, q in candidates)
     P, Q = max(p for p, _ in orders), max(q for _, q in orders)
@@ -196,8 +197,8 @@ def compare_orders_bayes(x, candidates, *, seed: int, num_warmup: int = 500,
     posts, rows = [], []
     for i, (p, q) in enumerate(orders):
         post = _run(x, p, q, P, Q, seed + i, num_warmup, num_samples, num_chains)
-        w, lo = az.waic(post.idata), az.loo(post.idata, pointwise=True)
+        w, lo = information(post.idata, "waic"), information(post.idata, "loo")
         posts.append(post)
-        rows.append((w.elpd_waic, w.se, lo.elpd_loo, lo.se, float(np.max(lo.pareto_k))))
+        rows.append((w.elpd, w.se, lo.elpd, lo.se, lo.pareto_k_max))
     r = np.array(rows)
     return BayesComparison(orders, tuple(posts), r[:, 0], r[:, 1], r[:, 2], r[:, 3], r[:, 4])

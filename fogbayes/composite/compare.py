@@ -75,7 +75,7 @@ def _cell_pointwise(X, y, cell, t_abs, lam, rho, theta_draws, s2):
 def score_orders(data: RateData, orders: Orders, sc: Scaling, *, criterion: str = "loo",
                  draws: int = 400, seed: int = 0) -> OrderScore:
     """elpd (LOO or WAIC over cells) of one candidate; its noise (lam, rho) by REML."""
-    import arviz as az
+    from ..inference.compare import information, loglik_idata
 
     X = np.asarray(design_matrix(orders, sc, data.T, data.W, data.t))
     y = (data.U - sc.U_ref) / sc.U_scale
@@ -83,13 +83,9 @@ def score_orders(data: RateData, orders: Orders, sc: Scaling, *, criterion: str 
     rng = np.random.default_rng(seed)
     th = rng.multivariate_normal(fit.theta, fit.cov, size=draws, method="cholesky")
     ll = _cell_pointwise(X, y, data.cell, data.time, fit.lam, fit.rho, th, fit.s2)
-    idata = az.from_dict(posterior={"theta": th[None]}, log_likelihood={"cells": ll[None]})
-    if criterion == "waic":
-        res = az.waic(idata, pointwise=True)
-        return OrderScore(orders, float(res.elpd_waic), float(res.se),
-                          np.asarray(res.waic_i).ravel())
-    res = az.loo(idata, pointwise=True)
-    return OrderScore(orders, float(res.elpd_loo), float(res.se), np.asarray(res.loo_i).ravel())
+    idata = loglik_idata(ll, name="cells", posterior={"theta": th[None]})
+    res = information(idata, "waic" if criterion == "waic" else "loo")
+    return OrderScore(orders, res.elpd, res.se, res.pointwise)
 
 
 def select_orders(data: RateData, *, criterion: str = "loo", scaling: Scaling | None = None,

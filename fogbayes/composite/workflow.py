@@ -167,9 +167,9 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
         bf = fit_bayes(data, want, seed=seed, noise=noise, scaling=sc, warmup=num_warmup,
                        samples=num_samples, chains=num_chains)
         rd = bf.raw_draws().reshape(-1, theta.size)
-        import arviz as az
+        from ..inference.compare import information
 
-        waic, loo = az.waic(bf.idata), az.loo(bf.idata)
+        waic, loo = information(bf.idata, "waic"), information(bf.idata, "loo")
         th = bf.theta.reshape(-1, theta.size)
         step = max(1, th.shape[0] // 200)
         doc["bayes"] = {
@@ -178,7 +178,7 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
             "raw_mean": _unflatten(rd.mean(0), want),
             "raw_lo90": _unflatten(np.quantile(rd, 0.05, axis=0), want),
             "raw_hi90": _unflatten(np.quantile(rd, 0.95, axis=0), want),
-            "elpd_waic": float(waic.elpd_waic), "elpd_loo": float(loo.elpd_loo),
+            "elpd_waic": waic.elpd, "elpd_loo": loo.elpd,
             "draws_scaled": th[::step].tolist(),
             "sigma_draws": (bf.sigma.reshape(-1)[::step] / sc.U_scale).tolist(),
         }

@@ -6,19 +6,20 @@ densities from the Kalman filter (a prequential score: it respects the coloured 
     log p(ybar_t | ybar_<t, beta_s) = log N(v_t(beta_s); 0, s2 F_t),   v_t(beta) = v_t^y - V_t^X beta,
 
 for draws beta_s from the GLS posterior N(beta_hat, s2 S_XX^-1) (flat prior), noise
-hyperparameters at their ML values. ArviZ then gives elpd_loo with its standard error,
-and ``az.compare`` the difference of two models with its own standard error (dse).
+hyperparameters at their ML values. The information criteria are
+:mod:`fogbayes.inference.compare`'s: elpd_loo with its standard error, and the difference
+of two models with the standard error of the pointwise differences.
 Where PSIS fails (NaN: a model far from the data gives wild importance ratios) the
 comparison falls back to WAIC, and says so (``ic``).
 """
 
 from __future__ import annotations
 
-import warnings
 from typing import NamedTuple
 
 import numpy as np
 
+from ..inference import compare as ic
 from ..inference import noise_ssm as ns
 from .context import Context
 from .fitting import ModelFit
@@ -41,26 +42,14 @@ def pointwise(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0)
                                betas, nf.sigma2)
 
 
-def _idata(ll: np.ndarray):
-    import arviz as az
-
-    # ArviZ wants a posterior group beside the log-likelihood; a dummy draw index serves.
-    return az.from_dict(posterior={"draw_index": np.arange(ll.shape[0], dtype=float)[None]},
-                        log_likelihood={"y": ll[None]})
-
-
-def loo(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0, cache=None):
-    """ArviZ PSIS-LOO (pointwise) of ``fit``; ``cache`` (a dict) avoids recomputing a fit's."""
-    import arviz as az
-
+def loo(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0,
+        cache=None) -> tuple[ic.IC, ic.IC]:
+    """PSIS-LOO and WAIC (pointwise) of ``fit``; ``cache`` (a dict) avoids recomputing a fit's."""
     key = (id(fit.noise), seed)
     if cache is not None and key in cache:
         return cache[key][1]
-    idata = _idata(pointwise(ctx, fit, n_draws=n_draws, seed=seed))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        out = az.loo(idata, pointwise=True)
-        out.waic_elpd = float(az.waic(idata).elpd_waic)
+    idata = ic.loglik_idata(pointwise(ctx, fit, n_draws=n_draws, seed=seed))
+    out = ic.information(idata, "loo"), ic.information(idata, "waic")
     if cache is not None:
         cache[key] = (fit, out)  # keep fit alive so its id is not reused
     return out
@@ -68,13 +57,13 @@ def loo(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0, cache
 
 def elpd(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0, cache=None) -> Elpd:
     """PSIS-LOO (and WAIC) of ``fit``; where PSIS fails (NaN) the WAIC value stands in."""
-    lo = loo(ctx, fit, n_draws=n_draws, seed=seed, cache=cache)
-    e = float(lo.elpd_loo) if np.isfinite(lo.elpd_loo) else float(lo.waic_elpd)
-    return Elpd(e, float(lo.se), float(lo.p_loo), float(lo.waic_elpd))
+    lo, wa = loo(ctx, fit, n_draws=n_draws, seed=seed, cache=cache)
+    e = lo.elpd if np.isfinite(lo.elpd) else wa.elpd
+    return Elpd(e, lo.se, lo.p, wa.elpd)
 
 
 class ElpdDiff(NamedTuple):
-    """elpd(with) - elpd(without) and its standard error (ArviZ ``compare``), ``ic`` used."""
+    """elpd(with) - elpd(without) and its standard error, ``ic`` used."""
 
     diff: float
     se: float
@@ -85,32 +74,11 @@ class ElpdDiff(NamedTuple):
 
 def compare(ctx: Context, with_fit: ModelFit, without_fit: ModelFit, *, n_draws: int = 100,
             seed: int = 0, cache=None) -> ElpdDiff:
-    """ArviZ ``compare`` of two fits by PSIS-LOO: difference and its standard error (dse)."""
-    import arviz as az
-
+    """The difference of two fits by PSIS-LOO and its standard error (pointwise, as
+    ``az.compare``'s dse); where PSIS fails (a model far from the data gives wild importance
+    weights: NaN) by WAIC instead."""
     a = loo(ctx, with_fit, n_draws=n_draws, seed=seed, cache=cache)
     b = loo(ctx, without_fit, n_draws=n_draws, seed=seed, cache=cache)
-    if np.isfinite(a.elpd_loo) and np.isfinite(b.elpd_loo):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            table = az.compare({"with": a, "without": b}, ic="loo")
-        e_with = float(table.loc["with", "elpd_loo"])
-        e_without = float(table.loc["without", "elpd_loo"])
-        return ElpdDiff(e_with - e_without, float(table["dse"].max()), e_with, e_without, "loo")
-    # PSIS failed (a model far from the data gives wild importance weights): WAIC instead
-    wa, wb = _waic(ctx, with_fit, n_draws, seed), _waic(ctx, without_fit, n_draws, seed)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        table = az.compare({"with": wa, "without": wb}, ic="waic")
-    e_with = float(table.loc["with", "elpd_waic"])
-    e_without = float(table.loc["without", "elpd_waic"])
-    return ElpdDiff(e_with - e_without, float(table["dse"].max()), e_with, e_without, "waic")
-
-
-def _waic(ctx: Context, fit: ModelFit, n_draws: int, seed: int):
-    import arviz as az
-
-    idata = _idata(pointwise(ctx, fit, n_draws=n_draws, seed=seed))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return az.waic(idata, pointwise=True)
+    k = 0 if np.isfinite(a[0].elpd) and np.isfinite(b[0].elpd) else 1
+    diff, se = ic.difference(a[k], b[k])
+    return ElpdDiff(diff, se, a[k].elpd, b[k].elpd, a[k].kind)

@@ -15,9 +15,11 @@ evidence with the correlation taken into account (``order_criterion="loo"`` in t
 workflow).
 
 WAIC and LOO come from ArviZ 0.23 (``az.waic``, ``az.loo``; the 0.x line still has
-``waic``, see docs/DESIGN.md) on the pointwise log-likelihood of
-:func:`fogbayes.inference.bayes.fit_linear_bayes`; :func:`compare` ranks several fits by
-expected log predictive density (higher is better).
+``waic``, see docs/DESIGN.md), called here and nowhere else: :func:`information` of a
+pointwise log-likelihood (:func:`loglik_idata`) -- the linear Bayes fits', the Allan and
+ARMA posteriors', the composite cells', the loop's Kalman one-step densities -- and
+:func:`difference` of two fits with its standard error; :func:`compare` ranks several fits
+by expected log predictive density (higher is better).
 """
 
 from __future__ import annotations
@@ -59,31 +61,76 @@ def select_order(fit_residual: Callable[[object], tuple[np.ndarray, int]],
     return OrderChoice(list(orders), scores, best, criterion)
 
 
-def waic(idata) -> dict:
-    """WAIC on the deviance-free ``log`` scale: elpd_waic, its SE and p_waic (ArviZ).
+class IC(NamedTuple):
+    """An information criterion of one fit (ArviZ, ``log`` scale: higher is better)."""
 
-    ArviZ's warning (posterior variance of a log density > 0.4) is returned as
-    ``warning`` instead of being printed.
-    """
+    kind: str               # "loo" (PSIS-LOO) or "waic"
+    elpd: float             # sum of the pointwise values
+    se: float
+    p: float                # effective number of parameters
+    pointwise: np.ndarray   # elpd_i per observation
+    pareto_k_max: float     # worst PSIS shape estimate (NaN for WAIC)
+    warning: bool           # ArviZ's warning (large k / WAIC variance > 0.4), not printed
+    data: object            # the ArviZ ELPDData (what ``az.compare`` takes)
+
+
+def loglik_idata(log_lik, *, name: str = "y", posterior: Mapping | None = None):
+    """InferenceData of a pointwise log-likelihood, (draws, n) or (chains, draws, n).
+
+    ArviZ wants a posterior group beside it; without one a draw index serves."""
+    import arviz as az
+
+    ll = np.asarray(log_lik, dtype=float)
+    ll = ll[None] if ll.ndim == 2 else ll
+    if posterior is None:
+        posterior = {"draw_index": np.broadcast_to(np.arange(ll.shape[1], dtype=float),
+                                                   ll.shape[:2]).copy()}
+    return az.from_dict(posterior=dict(posterior), log_likelihood={name: ll})
+
+
+def information(idata, kind: str = "loo") -> IC:
+    """PSIS-LOO (``kind="loo"``) or WAIC of ``idata``'s log-likelihood group, pointwise.
+
+    The one place fogbayes calls ``az.loo`` / ``az.waic``; their warnings are returned in
+    ``warning`` (and the Pareto k), never printed."""
     import arviz as az
 
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        w = az.waic(idata, scale="log")
-    return {"elpd": float(w.elpd_waic), "se": float(w.se), "p": float(w.p_waic),
-            "warning": bool(w.warning)}
+        warnings.simplefilter("ignore")
+        if kind == "loo":
+            r = az.loo(idata, pointwise=True, scale="log")
+            return IC("loo", float(r.elpd_loo), float(r.se), float(r.p_loo),
+                      np.asarray(r.loo_i).ravel(), float(np.max(np.asarray(r.pareto_k))),
+                      bool(r.warning), r)
+        if kind == "waic":
+            r = az.waic(idata, pointwise=True, scale="log")
+            return IC("waic", float(r.elpd_waic), float(r.se), float(r.p_waic),
+                      np.asarray(r.waic_i).ravel(), float("nan"), bool(r.warning), r)
+    raise ValueError(f"unknown information criterion {kind!r}: use 'loo' or 'waic'")
+
+
+def difference(a: IC, b: IC) -> tuple[float, float]:
+    """elpd(a) - elpd(b) and its standard error from the pointwise differences,
+    ``sqrt(n var(d_i))`` (as ``az.compare``'s dse; Vehtari, Gelman & Gabry 2017, eq. 24)."""
+    if a.kind != b.kind:
+        raise ValueError(f"cannot difference {a.kind} with {b.kind}")
+    d = a.pointwise - b.pointwise
+    return float(d.sum()), float(np.sqrt(d.size * np.var(d)))
+
+
+def waic(idata) -> dict:
+    """WAIC on the deviance-free ``log`` scale: elpd_waic, its SE, p_waic and ArviZ's
+    warning (posterior variance of a log density > 0.4), as a document's dict."""
+    w = information(idata, "waic")
+    return {"elpd": w.elpd, "se": w.se, "p": w.p, "warning": w.warning}
 
 
 def loo(idata) -> dict:
-    """PSIS-LOO: elpd_loo, its SE, p_loo and the worst Pareto k (ArviZ; its warning about
-    large k is returned as ``warning``)."""
-    import arviz as az
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        lo = az.loo(idata, scale="log", pointwise=True)
-    return {"elpd": float(lo.elpd_loo), "se": float(lo.se), "p": float(lo.p_loo),
-            "pareto_k_max": float(np.max(np.asarray(lo.pareto_k))), "warning": bool(lo.warning)}
+    """PSIS-LOO: elpd_loo, its SE, p_loo, the worst Pareto k and ArviZ's warning about
+    large k, as a document's dict."""
+    lo = information(idata, "loo")
+    return {"elpd": lo.elpd, "se": lo.se, "p": lo.p, "pareto_k_max": lo.pareto_k_max,
+            "warning": lo.warning}
 
 
 def compare(idatas: Mapping[str, object], *, ic: str = "loo") -> list[dict]:
