@@ -26,9 +26,8 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
-import optax
-from jax import lax
 
+from ..inference.lsq import minimize
 from .model import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
 
 Array = jax.Array
@@ -153,31 +152,16 @@ def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7
 
 
 def _lbfgs(u0: Array, x: Array, p: int, mask: Array, max_iter: int, tol: float):
-    """optax L-BFGS in a while_loop (vmap runs it until every series has stopped)."""
-    fun = partial(_neg_profile, x=x, p=p, mask=mask)
-    opt = optax.lbfgs()
-    vg = optax.value_and_grad_from_state(fun)
+    """:func:`fogbayes.inference.lsq.minimize` to max |gradient| < tol (optax's default
+    memory of 10); vmap runs it until every series has stopped."""
+    res = minimize(partial(_neg_profile, x=x, p=p, mask=mask), u0, max_iter=max_iter,
+                   tol=tol, memory_size=10, grad_norm=_max_abs)
+    return res.params, res.n_iter, res.grad_norm
 
-    def gmax(g):
-        g = jnp.max(jnp.abs(g))
-        return jnp.where(jnp.isfinite(g), g, jnp.inf)
 
-    def cond(carry):
-        _, _, it, g = carry
-        return (it < max_iter) & (g >= tol)
-
-    def body(carry):
-        u, state, it, _ = carry
-        value, grad = vg(u, state=state)
-        updates, state = opt.update(grad, state, u, value=value, grad=grad, value_fn=fun)
-        u = optax.apply_updates(u, updates)
-        # the zoom line search stores the gradient at the accepted point in the state
-        return u, state, it + 1, gmax(optax.tree_utils.tree_get(state, "grad"))
-
-    # g = inf: at least one step, whose line search evaluates the gradient at u0 anyway
-    inf = jnp.asarray(jnp.inf)
-    u, _, it, g = lax.while_loop(cond, body, (u0, opt.init(u0), jnp.asarray(0), inf))
-    return u, it, g
+def _max_abs(g: Array) -> Array:
+    g = jnp.max(jnp.abs(g))
+    return jnp.where(jnp.isfinite(g), g, jnp.inf)
 
 
 def _standard_errors(phi: Array, theta: Array, x: Array, mask: Array) -> tuple[Array, Array]:

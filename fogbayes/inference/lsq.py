@@ -294,33 +294,45 @@ class MinimizeResult(NamedTuple):
     converged: Array
 
 
-def minimize(loss_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
-             tol: float = 1e-9, memory_size: int = 20) -> MinimizeResult:
-    """Minimise ``loss_fn`` from ``init`` with optax L-BFGS (zoom line search) in one while_loop.
+def _lbfgs_step(loss_fn: Callable[[Any], Array], opt):
+    """One optax L-BFGS iteration (zoom line search): (params, state) -> (params, state, loss).
 
-    Stops when the gradient norm falls below ``tol`` (``converged=True``) or after
-    ``max_iter`` iterations (``converged=False``). Scale the problem so that the loss and
-    its gradient are of order one; ``tol`` is absolute.
-    """
-    opt = optax.lbfgs(memory_size=memory_size)
+    The one driver of optax L-BFGS in fogbayes; :func:`minimize` loops it to a gradient
+    tolerance and :func:`lbfgs_scan` a fixed number of times."""
     value_and_grad = optax.value_and_grad_from_state(loss_fn)
 
-    def step(carry):
-        params, state = carry
+    def step(params, state):
         value, grad = value_and_grad(params, state=state)
         updates, state = opt.update(grad, state, params, value=value, grad=grad,
                                     value_fn=loss_fn)
-        return optax.apply_updates(params, updates), state
+        return optax.apply_updates(params, updates), state, value
+
+    return step
+
+
+def minimize(loss_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
+             tol: float = 1e-9, memory_size: int = 20,
+             grad_norm: Callable[[Any], Array] = optax.tree.norm) -> MinimizeResult:
+    """Minimise ``loss_fn`` from ``init`` with optax L-BFGS (zoom line search) in one while_loop.
+
+    Stops when ``grad_norm`` of the gradient (Euclidean by default) falls below ``tol``
+    (``converged=True``), when it is not finite, or after ``max_iter`` iterations
+    (``converged=False``). Scale the problem so that the loss and its gradient are of order
+    one; ``tol`` is absolute. Under ``vmap`` each problem keeps its own stopping point.
+    """
+    opt = optax.lbfgs(memory_size=memory_size)
+    step = _lbfgs_step(loss_fn, opt)
 
     def going(carry):
         _, state = carry
         k = optax.tree.get(state, "count")
-        g = optax.tree.norm(optax.tree.get(state, "grad"))
+        # the zoom line search stores the gradient at the accepted point in the state
+        g = grad_norm(optax.tree.get(state, "grad"))
         return (k == 0) | ((k < max_iter) & (g >= tol) & jnp.isfinite(g))
 
-    params, state = jax.lax.while_loop(going, step, (init, opt.init(init)))
+    params, state = jax.lax.while_loop(going, lambda c: step(*c)[:2], (init, opt.init(init)))
     value, grad = jax.value_and_grad(loss_fn)(params)
-    gnorm = optax.tree.norm(grad)
+    gnorm = grad_norm(grad)
     return MinimizeResult(params, value, gnorm, optax.tree.get(state, "count"),
                           (gnorm < 10 * tol) & jnp.isfinite(value))
 
@@ -332,16 +344,13 @@ def lbfgs_scan(loss_fn: Callable[[Any], Array], init: Any, *, steps: int):
     convergence from its tail); :func:`minimize` stops on a gradient tolerance instead.
     """
     opt = optax.lbfgs()
-    value_and_grad = optax.value_and_grad_from_state(loss_fn)
+    step = _lbfgs_step(loss_fn, opt)
 
-    def step(carry, _):
-        params, state = carry
-        value, grad = value_and_grad(params, state=state)
-        updates, state = opt.update(grad, state, params, value=value, grad=grad,
-                                    value_fn=loss_fn)
-        return (optax.apply_updates(params, updates), state), value
+    def scan_step(carry, _):
+        params, state, value = step(*carry)
+        return (params, state), value
 
-    (params, _), trace = jax.lax.scan(step, (init, opt.init(init)), None, length=steps)
+    (params, _), trace = jax.lax.scan(scan_step, (init, opt.init(init)), None, length=steps)
     return params, trace
 
 
