@@ -24,10 +24,10 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy import optimize
 
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
+from ..inference.lockstep import failed_as_large, minimize_one_by_one
 
 
 @partial(jax.jit, static_argnums=0)
@@ -87,22 +87,18 @@ def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
                                           np.asarray(mask, float), np.asarray(w, float), pad))
     lo, hi = np.array(ns.bounds(spec)).T
 
-    def fun(th):
-        v, g = _negreml_and_grad(spec, jnp.asarray(th), *args)
-        v, g = float(v), np.asarray(g, dtype=float)
-        if not np.isfinite(v) or not np.all(np.isfinite(g)):
-            return 1e300, np.zeros_like(th)
-        return v, g
+    def batch(rows, thetas):  # one row at a time (lockstep's batch interface)
+        v, g = _negreml_and_grad(spec, jnp.asarray(thetas[0]), *args)
+        return np.array([float(v)]), np.asarray(g, dtype=float)[None]
+
+    def value(th) -> float:
+        return failed_as_large(*(a[0] for a in batch(None, th[None])))[0]
 
     starts = np.clip(_starts(spec, nf.theta), lo, hi)
-    vals = np.array([fun(th)[0] for th in starts])
-    best = None
-    for i in np.argsort(vals)[:n_starts]:
-        r = optimize.minimize(fun, starts[i], jac=True, method="L-BFGS-B",
-                              bounds=list(zip(lo, hi)), options={"maxiter": maxiter})
-        if best is None or r.fun < best.fun:
-            best = r
-    return np.asarray(best.x)
+    vals = np.array([value(th) for th in starts])
+    runs = minimize_one_by_one(batch, [starts[i] for i in np.argsort(vals)[:n_starts]],
+                               list(zip(lo, hi)), maxiter=maxiter)
+    return np.asarray(min(runs, key=lambda r: r.fun).x)
 
 
 def with_reml(ctx, fit, cache: dict | None = None):

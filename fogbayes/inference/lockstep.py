@@ -77,7 +77,7 @@ class _Rendezvous:
             self.cond.notify_all()
 
 
-def _answer(v, g) -> tuple[float, np.ndarray]:
+def failed_as_large(v, g) -> tuple[float, np.ndarray]:
     """A non-finite value or gradient goes to L-BFGS-B as (1e300, 0): a failed point."""
     v, g = float(v), np.array(g, dtype=float)
     if np.isfinite(v) and bool(np.all(np.isfinite(g))):
@@ -97,7 +97,7 @@ def minimize_one_by_one(batch: Batch, starts: Sequence[np.ndarray], bounds, *,
 
         def fun(x, row=row):
             v, g = batch(row, np.asarray(x, dtype=float)[None])
-            return _answer(v[0], g[0])
+            return failed_as_large(v[0], g[0])
 
         out.append(optimize.minimize(fun, np.asarray(x0, float), jac=True, method="L-BFGS-B",
                                      bounds=bounds, options={"maxiter": maxiter}))
@@ -137,7 +137,7 @@ def minimize_lockstep(batch: Batch, starts: Sequence[np.ndarray], bounds, *,
         while (posted := meet.next_round()) is not None:
             rows = np.array(sorted(posted), dtype=np.int64)  # an order threads cannot change
             vals, grads = batch(rows, np.stack([posted[i] for i in rows]))
-            meet.answer({int(i): _answer(vals[j], grads[j]) for j, i in enumerate(rows)})
+            meet.answer({int(i): failed_as_large(vals[j], grads[j]) for j, i in enumerate(rows)})
     except BaseException:
         meet.abort()
         raise
