@@ -1,0 +1,45 @@
+"""Each numerical service has one owner module (docs/DESIGN.md, "Layout"): the information
+criteria (ArviZ's loo/waic/compare) only in inference/compare.py, optax L-BFGS only in
+inference/lsq.py, SciPy's L-BFGS-B only in inference/lockstep.py. Read from the source with
+ast, so a second copy written anywhere in the package fails here."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PKG = Path(__file__).resolve().parent.parent / "fogbayes"
+
+
+def _callers(pred) -> set[str]:
+    out = set()
+    for f in PKG.rglob("*.py"):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.Call) and pred(node):
+                out.add(f.relative_to(PKG).as_posix())
+    return out
+
+
+def _attr_call(owner: str, names: set[str]):
+    def pred(node: ast.Call) -> bool:
+        fn = node.func
+        return (isinstance(fn, ast.Attribute) and fn.attr in names
+                and isinstance(fn.value, ast.Name) and fn.value.id == owner)
+    return pred
+
+
+def _lbfgsb(node: ast.Call) -> bool:
+    return any(k.arg == "method" and isinstance(k.value, ast.Constant)
+               and str(k.value.value).upper() == "L-BFGS-B" for k in node.keywords)
+
+
+def test_information_criteria_have_one_owner():
+    assert _callers(_attr_call("az", {"loo", "waic", "compare"})) == {"inference/compare.py"}
+
+
+def test_optax_lbfgs_has_one_owner():
+    assert _callers(_attr_call("optax", {"lbfgs"})) == {"inference/lsq.py"}
+
+
+def test_scipy_lbfgsb_has_one_owner():
+    assert _callers(_lbfgsb) == {"inference/lockstep.py"}
