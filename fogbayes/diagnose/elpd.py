@@ -42,7 +42,7 @@ def pointwise(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0)
                                betas, nf.sigma2)
 
 
-def loo(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0,
+def criteria(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0,
         cache=None) -> tuple[ic.IC, ic.IC]:
     """PSIS-LOO and WAIC (pointwise) of ``fit``; ``cache`` (a dict) avoids recomputing a fit's."""
     key = (id(fit.noise), seed)
@@ -57,7 +57,7 @@ def loo(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0,
 
 def elpd(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0, cache=None) -> Elpd:
     """PSIS-LOO (and WAIC) of ``fit``; where PSIS fails (NaN) the WAIC value stands in."""
-    lo, wa = loo(ctx, fit, n_draws=n_draws, seed=seed, cache=cache)
+    lo, wa = criteria(ctx, fit, n_draws=n_draws, seed=seed, cache=cache)
     e = lo.elpd if np.isfinite(lo.elpd) else wa.elpd
     return Elpd(e, lo.se, lo.p, wa.elpd)
 
@@ -77,8 +77,8 @@ def compare(ctx: Context, with_fit: ModelFit, without_fit: ModelFit, *, n_draws:
     """The difference of two fits by PSIS-LOO and its standard error (pointwise, as
     ``az.compare``'s dse); where PSIS fails (a model far from the data gives wild importance
     weights: NaN) by WAIC instead."""
-    a = loo(ctx, with_fit, n_draws=n_draws, seed=seed, cache=cache)
-    b = loo(ctx, without_fit, n_draws=n_draws, seed=seed, cache=cache)
+    a = criteria(ctx, with_fit, n_draws=n_draws, seed=seed, cache=cache)
+    b = criteria(ctx, without_fit, n_draws=n_draws, seed=seed, cache=cache)
     k = 0 if np.isfinite(a[0].elpd) and np.isfinite(b[0].elpd) else 1
     diff, se = ic.difference(a[k], b[k])
     return ElpdDiff(diff, se, a[k].elpd, b[k].elpd, a[k].kind)
