@@ -43,9 +43,12 @@ def _memory_maps() -> int:
 def _release_compiled_code():
     """Drop JAX's compiled executables when the process nears the kernel's map limit.
 
-    Each XLA:CPU executable keeps three anonymous memory maps (code, read-only data, data)
-    for as long as a jit cache holds it. The whole suite compiles ~20 000 distinct
-    programs (many shapes, orders and static options) in one process, which passes
+    XLA:CPU (jax 0.9) compiles each kernel of a program into its own object and keeps three
+    anonymous memory maps per kernel (code, read-only data, data) for as long as a jit cache
+    holds the program: a small program costs ~6 maps, but one ``fit_arma`` (L-BFGS with
+    its line search, and the Hessian) has ~420 kernels and costs ~1 100-1 450 maps per
+    shape and order (2026-11-29). Run in one process, the ARMA test files alone add
+    ~22 000 maps and the loop's ~6 300 (tests/test_loop_effects.py); the suite passes
     ``vm.max_map_count``; the next ``mmap`` then fails inside LLVM and the process dies
     (SIGSEGV or SIGABRT, in whichever test compiled next: CI of 2026-11-23 (befceaa) at
     ~92 %; 65 337 maps at the abort when measured). A library process re-running the same
