@@ -312,16 +312,17 @@ def _lbfgs_step(loss_fn: Callable[[Any], Array], opt):
 
 def minimize(loss_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
              tol: float = 1e-9, memory_size: int = 20,
-             grad_norm: Callable[[Any], Array] = optax.tree.norm) -> MinimizeResult:
+             grad_norm: Callable[[Any], Array] | None = None) -> MinimizeResult:
     """Minimise ``loss_fn`` from ``init`` with optax L-BFGS (zoom line search) in one while_loop.
 
-    Stops when ``grad_norm`` of the gradient (Euclidean by default) falls below ``tol``
+    Stops when ``grad_norm`` of the gradient (Euclidean when None) falls below ``tol``
     (``converged=True``), when it is not finite, or after ``max_iter`` iterations
     (``converged=False``). Scale the problem so that the loss and its gradient are of order
     one; ``tol`` is absolute. Under ``vmap`` each problem keeps its own stopping point.
     """
     opt = optax.lbfgs(memory_size=memory_size)
     step = _lbfgs_step(loss_fn, opt)
+    grad_norm = optax.tree.norm if grad_norm is None else grad_norm  # optax loads lazily
 
     def going(carry):
         _, state = carry
