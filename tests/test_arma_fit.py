@@ -109,3 +109,12 @@ def test_converged_flag_reports_an_iteration_cap():
     assert int(capped.n_iter) == 1
     assert jax.tree_util.tree_all(jax.tree_util.tree_map(lambda a: bool(jnp.all(jnp.isfinite(a))),
                                                          (capped.phi, capped.theta)))
+
+
+def test_a_non_finite_gradient_stops_the_fit_unconverged():
+    """A zero series has no likelihood maximum (sigma2 -> 0): its gradient is not finite, and
+    the fit stops at once and says it did not converge (it does not spin to max_iter)."""
+    X = np.stack([np.zeros(300), np.random.default_rng(0).normal(size=300)])
+    f = fit_arma_batch(jnp.array(X), p=1, q=1, max_iter=50)
+    assert not bool(f.converged[0]) and int(f.n_iter[0]) == 1
+    assert bool(f.converged[1]) and 1 < int(f.n_iter[1]) < 50

@@ -1,6 +1,7 @@
 """docs/calibration.md's table of effects, term kinds and what each applies to (the sensor
-or the calibration run) is the code's: every term kind is listed once with its own
-``applies``, and every effect the simulator plants is listed with the kinds it plants."""
+or the calibration run) is the code's: every term kind is listed with its own ``applies``,
+and every effect the simulator plants is listed with exactly the kinds it plants (over all
+its shapes)."""
 
 from __future__ import annotations
 
@@ -48,6 +49,6 @@ def test_every_planted_effect_is_documented_with_its_kinds():
         if spec.terms is None:  # markov_noise: noise, not a term
             continue
         shapes = [None, {"width": 3.0}] if name == "thermal_hysteresis" else [None]
-        for params in shapes:
-            planted = {tm.kind for tm, _ in spec.terms(resolve(name, params, cov))}
-            assert planted <= by_effect.get(name, set()), (name, planted)
+        planted = {tm.kind for params in shapes
+                   for tm, _ in spec.terms(resolve(name, params, cov))}
+        assert planted == by_effect.get(name, set()), (name, planted)

@@ -33,8 +33,21 @@ def _lbfgsb(node: ast.Call) -> bool:
                and str(k.value.value).upper() == "L-BFGS-B" for k in node.keywords)
 
 
+def _imports_from(module: str, names: set[str]) -> set[str]:
+    out = set()
+    for f in PKG.rglob("*.py"):
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith(module) \
+                    and any(a.name in names for a in node.names):
+                out.add(f.relative_to(PKG).as_posix())
+    return out
+
+
 def test_information_criteria_have_one_owner():
-    assert _callers(_attr_call("az", {"loo", "waic", "compare"})) == {"inference/compare.py"}
+    ic = {"loo", "waic", "compare"}
+    assert (_callers(_attr_call("az", ic)) | _callers(_attr_call("arviz", ic))
+            ) == {"inference/compare.py"}
+    assert not _imports_from("arviz", ic)
 
 
 def test_optax_lbfgs_has_one_owner():
@@ -43,3 +56,4 @@ def test_optax_lbfgs_has_one_owner():
 
 def test_scipy_lbfgsb_has_one_owner():
     assert _callers(_lbfgsb) == {"inference/lockstep.py"}
+    assert not _imports_from("scipy.optimize", {"fmin_l_bfgs_b"})

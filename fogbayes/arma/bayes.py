@@ -183,6 +183,7 @@ class BayesComparison(NamedTuple):
     elpd_loo: np.ndarray
     se_loo: np.ndarray
     pareto_k_max: np.ndarray
+    waic_warning: np.ndarray  # ArviZ's WAIC warning (a pointwise posterior variance > 0.4)
 
 
 def compare_orders_bayes(x, candidates, *, seed: int, num_warmup: int = 500,
@@ -199,6 +200,7 @@ def compare_orders_bayes(x, candidates, *, seed: int, num_warmup: int = 500,
         post = _run(x, p, q, P, Q, seed + i, num_warmup, num_samples, num_chains)
         w, lo = information(post.idata, "waic"), information(post.idata, "loo")
         posts.append(post)
-        rows.append((w.elpd, w.se, lo.elpd, lo.se, lo.pareto_k_max))
-    r = np.array(rows)
-    return BayesComparison(orders, tuple(posts), r[:, 0], r[:, 1], r[:, 2], r[:, 3], r[:, 4])
+        rows.append((w.elpd, w.se, lo.elpd, lo.se, lo.pareto_k_max, w.warning))
+    r = np.array(rows, dtype=float)
+    return BayesComparison(orders, tuple(posts), r[:, 0], r[:, 1], r[:, 2], r[:, 3], r[:, 4],
+                           r[:, 5] > 0)

@@ -153,10 +153,12 @@ def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7
 
 def _lbfgs(u0: Array, x: Array, p: int, mask: Array, max_iter: int, tol: float):
     """:func:`fogbayes.inference.lsq.minimize` to max |gradient| < tol (optax's default
-    memory of 10); vmap runs it until every series has stopped."""
+    memory of 10); vmap runs it until every series has stopped. A non-finite gradient
+    stops a series at once (not converged), where the loop written here before ran it on
+    to ``max_iter``."""
     res = minimize(partial(_neg_profile, x=x, p=p, mask=mask), u0, max_iter=max_iter,
                    tol=tol, memory_size=10, grad_norm=_max_abs)
-    return res.params, res.n_iter, res.grad_norm
+    return res.params, res.n_iter.astype(int), res.grad_norm
 
 
 def _max_abs(g: Array) -> Array:

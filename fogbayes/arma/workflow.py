@@ -158,6 +158,7 @@ def _bayes_section(x: np.ndarray, orders, seed: int) -> dict:
         {"p": a, "q": b, "name": order_name(a, b), "elpd_waic": float(c.elpd_waic[i]),
          "se_waic": float(c.se_waic[i]), "elpd_loo": float(c.elpd_loo[i]),
          "se_loo": float(c.se_loo[i]), "pareto_k_max": float(c.pareto_k_max[i]),
+         "waic_warning": bool(c.waic_warning[i]),
          "phi_mean": c.posteriors[i].phi, "theta_mean": c.posteriors[i].theta,
          "sigma2_mean": c.posteriors[i].sigma2, "converged": c.posteriors[i].converged,
          "rhat_max": c.posteriors[i].rhat_max, "ess_bulk_min": c.posteriors[i].ess_bulk_min,

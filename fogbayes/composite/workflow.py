@@ -179,6 +179,9 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
             "raw_lo90": _unflatten(np.quantile(rd, 0.05, axis=0), want),
             "raw_hi90": _unflatten(np.quantile(rd, 0.95, axis=0), want),
             "elpd_waic": waic.elpd, "elpd_loo": loo.elpd,
+            # ArviZ's reliability flags (Pareto k > 0.7; WAIC's posterior variance > 0.4)
+            "loo_pareto_k_max": loo.pareto_k_max, "loo_warning": loo.warning,
+            "waic_warning": waic.warning,
             "draws_scaled": th[::step].tolist(),
             "sigma_draws": (bf.sigma.reshape(-1)[::step] / sc.U_scale).tolist(),
         }
