@@ -91,8 +91,9 @@ def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
         v, g = _negreml_and_grad(spec, jnp.asarray(thetas[0]), *args)
         return np.array([float(v)]), np.asarray(g, dtype=float)[None]
 
-    def value(th) -> float:
-        return failed_as_large(*(a[0] for a in batch(None, th[None])))[0]
+    def value(th) -> float:  # the start's objective, a failed point as 1e300
+        v, g = batch(None, th[None])
+        return failed_as_large(v[0], g[0])[0]
 
     starts = np.clip(_starts(spec, nf.theta), lo, hi)
     vals = np.array([value(th) for th in starts])
