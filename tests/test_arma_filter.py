@@ -94,3 +94,29 @@ def test_denoise_rejects_impossible_noise_variance():
     # white noise model: everything is noise, the signal is zero
     d = denoise([], [], 1.0, np.ones(5))
     assert np.all(d.smoothed == 0.0) and np.all(d.noise == 1.0)
+
+
+@pytest.mark.parametrize("phi,theta,h", [([0.9], [0.3], 0.2), ([0.5, 0.2], [0.4], 0.0)])
+def test_missing_tail_leaves_filter_smoother_and_likelihood_of_the_series(phi, theta, h):
+    """n_valid: a series held in a longer array, its tail noise (not zeros) that the
+    filter must treat as missing. Filter, RTS smoother and log-likelihood over t < n equal
+    the plain ones of the series alone (to float64 round-off)."""
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=500).cumsum() * 0.05 + rng.normal(size=500)
+    ss = arma_state_space(jnp.array(phi), jnp.array(theta), 1.0)
+    plain = kalman_filter(ss, jnp.array(x), h)
+    held = kalman_filter(ss, jnp.array(np.r_[x, 3.0 * rng.normal(size=76)]), h, n_valid=500)
+    assert float(held.loglik) == pytest.approx(float(plain.loglik), rel=1e-13)
+    for a, b in ((plain.filt_mean, held.filt_mean), (plain.innov, held.innov),
+                 (rts_smoother(ss, plain).mean, rts_smoother(ss, held).mean),
+                 (rts_smoother(ss, plain).cov, rts_smoother(ss, held).cov)):
+        np.testing.assert_allclose(np.asarray(b)[:500], np.asarray(a), rtol=1e-12, atol=1e-14)
+
+
+def test_one_step_prediction_of_nearby_lengths_compiles_one_filter():
+    x = np.random.default_rng(5).normal(size=900)
+    kalman_filter.clear_cache()
+    for n in (790, 820, 896):  # one bucket: 896
+        one = one_step_prediction([0.5], [0.2], 1.0, x[:n])
+        assert one.residual.shape == (n,)
+    assert kalman_filter._cache_size() == 1

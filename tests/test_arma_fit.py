@@ -118,3 +118,36 @@ def test_a_non_finite_gradient_stops_the_fit_unconverged():
     f = fit_arma_batch(jnp.array(X), p=1, q=1, max_iter=50)
     assert not bool(f.converged[0]) and int(f.n_iter[0]) == 1
     assert bool(f.converged[1]) and 1 < int(f.n_iter[1]) < 50
+
+
+def test_nearby_lengths_share_one_program_and_keep_their_own_numbers():
+    """Lengths in one bucket (and another max_iter) reuse one compiled fit: one ARMA(1, 1)
+    program compiles in ~5-7 s and holds ~1 100 memory maps. Each fit is still the MLE of
+    its own series: the exact Kalman log-likelihood of the unpadded series at the returned
+    parameters equals the reported one, and it is the maximum (a step either way is lower)."""
+    from fogbayes.arma.fit import _fit_arma
+    from fogbayes.models.buckets import bucket_length
+    from fogbayes.models.arma import arma_loglik
+
+    lengths = (1281, 1400, 1536)
+    assert {bucket_length(n) for n in lengths} == {1536}
+    x = _sim([0.6], [-0.5], 9, n=max(lengths))
+    _fit_arma.clear_cache()
+    for n in lengths:
+        f = fit_arma(jnp.array(x[:n]), p=1, q=1, max_iter=150 + n % 7)
+        assert bool(f.converged)
+        ll = float(arma_loglik(f.phi, f.theta, f.sigma2, jnp.array(x[:n]), method="kalman"))
+        assert float(f.loglik) == pytest.approx(ll, rel=1e-11)
+        for d in (-1e-3, 1e-3):
+            assert float(arma_loglik(f.phi + d, f.theta, f.sigma2, jnp.array(x[:n]))) < ll
+    assert _fit_arma._cache_size() == 1
+
+
+def test_bucket_lengths_pad_at_most_a_quarter():
+    from fogbayes.models.buckets import bucket_length
+
+    for n in list(range(1, 300)) + [1023, 1024, 1025, 7199, 7200, 10_000, 123_457]:
+        b = bucket_length(n)
+        assert n <= b <= max(n, 1.25 * n), (n, b)
+    # four lengths per octave: every length in (4096, 8192] rounds to one of four
+    assert {bucket_length(n) for n in range(4097, 8193)} == {5120, 6144, 7168, 8192}

@@ -137,3 +137,21 @@ def test_series_shorter_than_the_state(n, phi, theta):
     ref = stats.multivariate_normal(np.zeros(n), linalg.toeplitz(g)).logpdf(x)
     ll = float(arma_loglik(jnp.array(phi), jnp.array(theta), 1.3, jnp.array(x)))
     assert ll == pytest.approx(ref, rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("phi,theta", [([0.5], [0.3]), ([0.4, 0.2], [0.5]), ([], [0.6, -0.2]),
+                                       ([0.7], []), ([0.3, 0.2, -0.1], [0.5, 0.2, 0.1])])
+def test_a_series_held_in_a_longer_array_has_its_own_likelihood(phi, theta):
+    """n_valid: x_1..x_n of a longer array (the tail is noise, not zeros, so nothing hides a
+    leak) gives the Kalman filter's exact log-likelihood of x_1..x_n alone; n = 3 is below
+    the state dimension of the ARMA(3, 3)."""
+    rng = np.random.default_rng(11)
+    phi, theta = jnp.array(phi), jnp.array(theta)
+    for n in (3, 57, 400):
+        x = _simulate(np.asarray(phi), np.asarray(theta), n, seed=n)
+        held = jnp.array(np.concatenate([x, 5.0 * rng.normal(size=77)]))
+        lp, s2 = arma_profile_loglik(phi, theta, held, n_valid=n)
+        ref = float(arma_loglik(phi, theta, s2, jnp.array(x), method="kalman"))
+        assert float(lp) == pytest.approx(ref, rel=1e-11)
+        assert float(s2) == pytest.approx(float(arma_profile_loglik(phi, theta, jnp.array(x))[1]),
+                                          rel=1e-12)

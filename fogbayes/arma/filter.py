@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ArgumentError
+from ..models.buckets import bucket_length, padded
 from ..models.statespace import arma_state_space, kalman_filter, rts_smoother
 
 
@@ -51,12 +52,20 @@ class Denoised(NamedTuple):
     signal_sigma2: float
 
 
+def _filter(ss, x: np.ndarray, obs_var=0.0):
+    """The Kalman filter of x, run inside ``bucket_length(n)`` samples (the tail missing)
+    so that nearby lengths share one compiled filter; outputs cover the whole array."""
+    n = x.shape[0]
+    return kalman_filter(ss, padded(x, bucket_length(n)), obs_var, n_valid=n)
+
+
 def one_step_prediction(phi, theta, sigma2, x) -> OneStep:
     """Exact one-step-ahead prediction and innovations of x under ARMA(phi, theta, sigma2)."""
-    x = jnp.asarray(x, dtype=float)
-    f = kalman_filter(arma_state_space(phi, theta, sigma2), x)
-    v, F = np.asarray(f.innov), np.asarray(f.innov_var)
-    return OneStep(np.asarray(x) - v, v, F, v / np.sqrt(F / float(sigma2)))
+    x = np.asarray(x, dtype=float)
+    f = _filter(arma_state_space(phi, theta, sigma2), x)
+    n = x.shape[0]
+    v, F = np.asarray(f.innov)[:n], np.asarray(f.innov_var)[:n]
+    return OneStep(x - v, v, F, v / np.sqrt(F / float(sigma2)))
 
 
 def arma_spectrum(phi, theta, sigma2, omega) -> np.ndarray:
@@ -122,13 +131,15 @@ def denoise(phi, theta, sigma2, x, *, noise_var: float | None = None) -> Denoise
                             "(canonical decomposition) or pass a smaller value")
     h = min(h, h_max)
     sphi, sth, s2 = signal_model(phi, theta, sigma2, h)
-    x = jnp.asarray(x, dtype=float)
+    xn = np.asarray(x, dtype=float)
+    n = xn.shape[0]
     if s2 == 0.0:
-        z = np.zeros(x.shape[0])
-        return Denoised(z, z, np.asarray(x), np.asarray(x), h, sphi, sth, 0.0)
+        z = np.zeros(n)
+        return Denoised(z, z, xn, xn, h, sphi, sth, 0.0)
     ss = arma_state_space(jnp.asarray(sphi), jnp.asarray(sth), s2)
-    filt = kalman_filter(ss, x, obs_var=h)
+    # the smoother runs back over the missing tail unchanged (no gain there), so from
+    # t = n - 1 down it is the smoother of x_1..x_n
+    filt = _filter(ss, xn, obs_var=h)
     sm = rts_smoother(ss, filt)
-    fs, ms = np.asarray(filt.filt_mean[:, 0]), np.asarray(sm.mean[:, 0])
-    xn = np.asarray(x)
+    fs, ms = np.asarray(filt.filt_mean[:n, 0]), np.asarray(sm.mean[:n, 0])
     return Denoised(fs, ms, xn - ms, xn - fs, h, sphi, sth, s2)

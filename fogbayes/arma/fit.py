@@ -15,7 +15,10 @@ u = atanh(PACF) (stationary and invertible by construction), stopping when the g
 log-likelihood in (phi, theta) and 2 sigma2^2 / n for sigma2.
 
 Everything is a pure function of static (p, q) and an array; ``fit_arma_batch`` is the same
-fit vmapped over many series of equal length in one compiled call.
+fit vmapped over many series of equal length in one compiled call. A series of n samples
+is fitted inside an array of ``bucket_length(n)`` (:mod:`fogbayes.models.buckets`), its
+tail masked out of every sum (:func:`fogbayes.models.arma.profile_terms`): records of nearby
+lengths share one compiled program and keep the numbers of the unpadded series.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import jax
 import jax.numpy as jnp
 
 from ..inference.lsq import minimize
+from ..models.buckets import bucket_length, padded
 from .model import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
 
 Array = jax.Array
@@ -67,24 +71,26 @@ def default_ar_order(n: int, p: int, q: int) -> int:
     return int(max(p + q + 1, min(round(10 * math.log10(max(n, 10))), max(n // 10, 1))))
 
 
-def _lags(x: Array, k: int, start: int) -> Array:
-    """Columns x_{t-1}, ..., x_{t-k} for t = start..n-1 (shape (n - start, k)), one gather."""
+def _lags(x: Array, k: int) -> Array:
+    """Columns x_{t-1}, ..., x_{t-k} for every t (shape (n, k)), pre-sample values 0."""
     n = x.shape[0]
-    idx = jnp.arange(start, n)[:, None] - jnp.arange(1, k + 1)[None, :]
-    return x[idx]
+    xp = jnp.concatenate([jnp.zeros(k), x])
+    idx = k + jnp.arange(n)[:, None] - jnp.arange(1, k + 1)[None, :]
+    return xp[idx]
 
 
-def _ols(X: Array, y: Array, mask: Array) -> Array:
-    """Least squares by the normal equations (X: a few lag columns of a stationary series).
+def _ols(X: Array, y: Array, rows: Array, mask: Array) -> tuple[Array, Array]:
+    """Least squares on the rows where ``rows`` is 1, by the normal equations (X: a few lag
+    columns of a stationary series): (coefficients, mean squared residual on those rows).
 
-    Masked (all-zero) columns get a unit diagonal so their coefficient is exactly 0.
+    Masked (0) columns get a unit diagonal so their coefficient is exactly 0.
     """
-    if X.shape[1] == 0:
-        return jnp.zeros(0)
-    return jnp.linalg.solve(X.T @ X + jnp.diag(1.0 - mask), X.T @ y)
+    X, y = X * mask * rows[:, None], y * rows
+    coef = (jnp.linalg.solve(X.T @ X + jnp.diag(1.0 - mask), X.T @ y) if X.shape[1]
+            else jnp.zeros(0))
+    return coef, jnp.sum((y - X @ coef) ** 2) / jnp.sum(rows)
 
 
-@partial(jax.jit, static_argnames=("p", "q", "ar_order"))
 def long_ar_start(x: Array, *, p: int, q: int, ar_order: int | None = None,
                   mask_phi: Array | None = None, mask_theta: Array | None = None) -> ArmaStart:
     """Hannan-Rissanen two-stage estimate of ARMA(p, q) (see module docstring).
@@ -93,32 +99,42 @@ def long_ar_start(x: Array, *, p: int, q: int, ar_order: int | None = None,
     shapes (masked coefficients are exactly 0), so every candidate order of a selection
     shares one compiled function.
     """
-    x = jnp.asarray(x, dtype=float)
-    n = x.shape[0]
+    n = jnp.shape(x)[0]
+    m = default_ar_order(n, p, q) if ar_order is None else int(ar_order)
+    return _long_ar_start(padded(x, bucket_length(n)), n, m, p=p, q=q, mask_phi=mask_phi,
+                          mask_theta=mask_theta)
+
+
+@partial(jax.jit, static_argnames=("p", "q"))
+def _long_ar_start(x: Array, n, m, *, p: int, q: int, mask_phi=None, mask_theta=None
+                   ) -> ArmaStart:
+    """:func:`long_ar_start` of x[:n] inside the padded x (n and the long-AR order m traced)."""
+    N = x.shape[0]
+    t = jnp.arange(N)
     mp = jnp.ones(p) if mask_phi is None else jnp.asarray(mask_phi, dtype=float)
     mq = jnp.ones(q) if mask_theta is None else jnp.asarray(mask_theta, dtype=float)
-    m = default_ar_order(n, p, q) if ar_order is None else ar_order
-    if q == 0:  # pure AR: stage 2 alone is ordinary least squares on the lags
-        X, y = _lags(x, p, p) * mp, x[p:]
-        phi = _ols(X, y, mp)
-        return ArmaStart(phi, jnp.zeros(0), jnp.mean((y - X @ phi) ** 2), m)
-    psi = _ols(_lags(x, m, m), x[m:], jnp.ones(m))
-    a = jnp.zeros(n).at[m:].set(x[m:] - _lags(x, m, m) @ psi)
-    start = m + q
+    if q == 0:  # pure AR: stage 2 alone is ordinary least squares on the lags, t >= p
+        phi, s2 = _ols(_lags(x, p), x, ((t >= p) & (t < n)).astype(float), mp)
+        return ArmaStart(phi, jnp.zeros(0), s2, m)
+    # stage 1: AR(m) on t = m..n-1; m is traced, so the AR(M) shapes hold it with a mask
+    M = default_ar_order(N, p, q)  # >= the order of any length <= N (it never decreases)
+    long_rows = ((t >= m) & (t < n)).astype(float)
+    L = _lags(x, M) * (jnp.arange(M) < m)
+    psi, _ = _ols(L, x, long_rows, (jnp.arange(M) < m).astype(float))
+    a = (x - L @ psi) * long_rows
+    # stage 2: x_t on x_{t-1..t-p} and a^_{t-1..t-q}, t = m + q .. n-1
     mask = jnp.concatenate([mp, mq])
-    X = jnp.concatenate([_lags(x, p, start), _lags(a, q, start)], axis=1) * mask
-    y = x[start:]
-    coef = _ols(X, y, mask)
-    return ArmaStart(coef[:p], -coef[p:], jnp.mean((y - X @ coef) ** 2), m)
+    X = jnp.concatenate([_lags(x, p), _lags(a, q)], axis=1)
+    coef, s2 = _ols(X, x, ((t >= m + q) & (t < n)).astype(float), mask)
+    return ArmaStart(coef[:p], -coef[p:], s2, m)
 
 
-def _neg_profile(u: Array, x: Array, p: int, mask: Array) -> Array:
+def _neg_profile(u: Array, x: Array, n, p: int, mask: Array) -> Array:
     u = u * mask  # masked coordinates stay at PACF 0, i.e. coefficient 0
     phi, theta = unconstrained_to_params(u[:p], u[p:])
-    return -arma_profile_loglik(phi, theta, x)[0] / x.shape[0]
+    return -arma_profile_loglik(phi, theta, x, n_valid=n)[0] / n
 
 
-@partial(jax.jit, static_argnames=("p", "q", "max_iter"))
 def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7,
              init: ArmaStart | None = None, mask_phi: Array | None = None,
              mask_theta: Array | None = None) -> ArmaFit:
@@ -128,35 +144,52 @@ def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7
     invertible region (|PACF| <= 0.98), and runs optax L-BFGS with a zoom line search on
     -log L_p(u) / n until max |gradient| < tol or ``max_iter`` iterations. Masks as in
     :func:`long_ar_start` (masked entries are returned as 0 with standard error 0).
+    One compiled program per (p, q) and bucket length (:mod:`fogbayes.models.buckets`);
+    ``max_iter`` and ``tol`` are its arguments, not constants.
     """
-    x = jnp.asarray(x, dtype=float)
-    n = x.shape[0]
+    n = jnp.shape(x)[0]
+    return _fit_arma(padded(x, bucket_length(n)), n, default_ar_order(n, p, q), max_iter,
+                     tol, p=p, q=q, init=init, mask_phi=mask_phi, mask_theta=mask_theta)
+
+
+@partial(jax.jit, static_argnames=("p", "q"))
+def _fit_arma(x: Array, n, m, max_iter, tol, *, p: int, q: int, init=None, mask_phi=None,
+              mask_theta=None) -> ArmaFit:
+    return fit_padded(x, n, m, p=p, q=q, max_iter=max_iter, tol=tol, init=init,
+                      mask_phi=mask_phi, mask_theta=mask_theta)
+
+
+def fit_padded(x: Array, n, m, *, p: int, q: int, max_iter=200, tol=1e-7,
+               init: ArmaStart | None = None, mask_phi: Array | None = None,
+               mask_theta: Array | None = None) -> ArmaFit:
+    """:func:`fit_arma` of the series x[:n] held in a longer array x (traceable: n, the
+    long-AR order m, ``max_iter`` and ``tol`` may be traced; vmap it for many series)."""
     mp = jnp.ones(p) if mask_phi is None else jnp.asarray(mask_phi, dtype=float)
     mq = jnp.ones(q) if mask_theta is None else jnp.asarray(mask_theta, dtype=float)
     mask = jnp.concatenate([mp, mq])
     if init is None:
-        init = long_ar_start(x, p=p, q=q, mask_phi=mp, mask_theta=mq)
+        init = _long_ar_start(x, n, m, p=p, q=q, mask_phi=mp, mask_theta=mq)
     up, uq = params_to_unconstrained(init.phi, init.theta, clip=0.98)
     u0 = jnp.nan_to_num(jnp.concatenate([up, uq])) * mask  # degenerate start -> white noise
 
     if p + q == 0:
         u, it, gnorm = u0, jnp.asarray(0), jnp.asarray(0.0)
     else:
-        u, it, gnorm = _lbfgs(u0, x, p, mask, max_iter, tol)
+        u, it, gnorm = _lbfgs(u0, x, n, p, mask, max_iter, tol)
     phi, theta = unconstrained_to_params(u[:p] * mp, u[p:] * mq)
-    ll, s2 = arma_profile_loglik(phi, theta, x)
-    se_phi, se_theta = _standard_errors(phi, theta, x, mask)
+    ll, s2 = arma_profile_loglik(phi, theta, x, n_valid=n)
+    se_phi, se_theta = _standard_errors(phi, theta, x, n, mask)
     converged = (gnorm < tol) & jnp.isfinite(ll) & jnp.all(jnp.isfinite(u))
     return ArmaFit(phi, theta, s2, ll, se_phi, se_theta, s2 * jnp.sqrt(2.0 / n),
                    converged, it, gnorm)
 
 
-def _lbfgs(u0: Array, x: Array, p: int, mask: Array, max_iter: int, tol: float):
+def _lbfgs(u0: Array, x: Array, n, p: int, mask: Array, max_iter, tol):
     """:func:`fogbayes.inference.lsq.minimize` to max |gradient| < tol (optax's default
     memory of 10); vmap runs it until every series has stopped. A non-finite gradient
     stops a series at once (not converged), where the loop written here before ran it on
     to ``max_iter``."""
-    res = minimize(partial(_neg_profile, x=x, p=p, mask=mask), u0, max_iter=max_iter,
+    res = minimize(partial(_neg_profile, x=x, n=n, p=p, mask=mask), u0, max_iter=max_iter,
                    tol=tol, memory_size=10, grad_norm=_max_abs)
     return res.params, res.n_iter.astype(int), res.grad_norm
 
@@ -166,7 +199,8 @@ def _max_abs(g: Array) -> Array:
     return jnp.where(jnp.isfinite(g), g, jnp.inf)
 
 
-def _standard_errors(phi: Array, theta: Array, x: Array, mask: Array) -> tuple[Array, Array]:
+def _standard_errors(phi: Array, theta: Array, x: Array, n, mask: Array
+                     ) -> tuple[Array, Array]:
     """sqrt(diag(-H^-1)) of the profile log-likelihood in (phi, theta); 0 where masked.
 
     H by central differences of the exact AD gradient (step 1e-5: truncation ~1e-10
@@ -179,7 +213,7 @@ def _standard_errors(phi: Array, theta: Array, x: Array, mask: Array) -> tuple[A
     k = p + q
 
     def g(v):
-        return jax.grad(lambda w: arma_profile_loglik(w[:p], w[p:], x)[0])(v)
+        return jax.grad(lambda w: arma_profile_loglik(w[:p], w[p:], x, n_valid=n)[0])(v)
 
     v0 = jnp.concatenate([phi, theta])
     h = 1e-5
@@ -193,7 +227,13 @@ def _standard_errors(phi: Array, theta: Array, x: Array, mask: Array) -> tuple[A
     return se[:p], se[p:]
 
 
-@partial(jax.jit, static_argnames=("p", "q", "max_iter"))
 def fit_arma_batch(X: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7) -> ArmaFit:
     """:func:`fit_arma` vmapped over the rows of X (many series of equal length), one call."""
-    return jax.vmap(lambda x: fit_arma(x, p=p, q=q, max_iter=max_iter, tol=tol))(X)
+    n = jnp.shape(X)[-1]
+    return _fit_arma_batch(padded(X, bucket_length(n)), n, default_ar_order(n, p, q),
+                           max_iter, tol, p=p, q=q)
+
+
+@partial(jax.jit, static_argnames=("p", "q"))
+def _fit_arma_batch(X: Array, n, m, max_iter, tol, *, p: int, q: int) -> ArmaFit:
+    return jax.vmap(lambda x: fit_padded(x, n, m, p=p, q=q, max_iter=max_iter, tol=tol))(X)

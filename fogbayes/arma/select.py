@@ -8,7 +8,8 @@ grid p, q <= 3 and BIC:
 with log L the exact log-likelihood at the MLE (zero-mean series; k counts no mean, as
 statsmodels' ``trend="n"``). Every candidate is fitted inside the shapes of the largest
 (P, Q) with 0/1 masks on the coefficients (see :func:`fogbayes.arma.fit.fit_arma`),
-so the candidate set costs one compilation; many series of equal length are vmapped.
+so the candidate set costs one compilation (for every length of the same
+:func:`~fogbayes.models.buckets.bucket_length`); many series of equal length are vmapped.
 
 AIC is efficient but not consistent: with a nested larger candidate it over-fits with
 probability ~P(chi2_1 > 2) = 16 % per extra parameter, so it cannot recover a true order
@@ -25,7 +26,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .fit import ArmaFit, fit_arma
+from ..models.buckets import bucket_length, padded
+from .fit import ArmaFit, default_ar_order, fit_padded
 
 Array = jax.Array
 
@@ -82,11 +84,11 @@ def _masks(orders, P: int, Q: int) -> tuple[Array, Array]:
     return jnp.asarray(mp), jnp.asarray(mq)
 
 
-@partial(jax.jit, static_argnames=("P", "Q", "max_iter", "batched"))
-def _fit_one_order(x: Array, mp: Array, mq: Array, *, P: int, Q: int, max_iter: int,
+@partial(jax.jit, static_argnames=("P", "Q", "batched"))
+def _fit_one_order(x: Array, n, m, mp: Array, mq: Array, max_iter, *, P: int, Q: int,
                    batched: bool) -> ArmaFit:
     def fit(s):
-        return fit_arma(s, p=P, q=Q, mask_phi=mp, mask_theta=mq, max_iter=max_iter)
+        return fit_padded(s, n, m, p=P, q=Q, mask_phi=mp, mask_theta=mq, max_iter=max_iter)
 
     return jax.vmap(fit)(x) if batched else fit(x)
 
@@ -100,10 +102,13 @@ def select_order(x, candidates=PAPER_CANDIDATES, *, max_iter: int = 200) -> Orde
     mp, mq = _masks(orders, P, Q)
     x = jnp.asarray(x, dtype=float)
     n = x.shape[-1]
+    # held in bucket_length(n) samples: one compiled program serves nearby lengths
+    m = default_ar_order(n, P, Q)
+    x = jnp.asarray(padded(x, bucket_length(n)))
     # Candidates run one after another through one compiled function (the masks are
     # arguments): vmapping them would make every candidate wait for the slowest to
     # converge (measured 4x more likelihood evaluations on the p, q <= 3 grid).
-    per = [_fit_one_order(x, mp[i], mq[i], P=P, Q=Q, max_iter=max_iter, batched=x.ndim > 1)
+    per = [_fit_one_order(x, n, m, mp[i], mq[i], max_iter, P=P, Q=Q, batched=x.ndim > 1)
            for i in range(len(orders))]
     axis = 0 if x.ndim == 1 else 1
     fits = jax.tree_util.tree_map(lambda *a: jnp.stack(a, axis=axis), *per)

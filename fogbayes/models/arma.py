@@ -152,7 +152,8 @@ def _initial_state_drive(T: Array, R: Array, theta: Array) -> Array:
                       for t in range(r)])
 
 
-def profile_terms(phi: Array, theta: Array, x: Array, *, unroll: int = 1) -> tuple[Array, Array]:
+def profile_terms(phi: Array, theta: Array, x: Array, *, n_valid=None, unroll: int = 1
+                  ) -> tuple[Array, Array]:
     """(log det Sigma~, x' Sigma~^-1 x) for Sigma = sigma2 Sigma~, the exact ARMA covariance.
 
     Exact "conditional residuals + initial-state correction" form (equal to the Kalman
@@ -170,6 +171,11 @@ def profile_terms(phi: Array, theta: Array, x: Array, *, unroll: int = 1) -> tup
     H_{ss'} = sum_t h_{t-s} h_{t-s'} (s, s' < r) -- shifted dot products. The only
     sequential work is one two-column all-pole filter of length n (c and h); value and
     gradient cost O(n q). Pure AR needs no scan at all.
+
+    ``n_valid`` (a traced integer, default all of x) takes only x_1..x_n of a longer array
+    x (n <= len(x); what follows is ignored): every filter is causal, so c and h at t < n do
+    not see the tail, and the sums over t < n drop it with a mask. One compiled program
+    then serves every length up to len(x) (:func:`fogbayes.models.buckets.bucket_length`).
     """
     phi = jnp.atleast_1d(jnp.asarray(phi, dtype=float))
     theta = jnp.atleast_1d(jnp.asarray(theta, dtype=float))
@@ -184,11 +190,20 @@ def profile_terms(phi: Array, theta: Array, x: Array, *, unroll: int = 1) -> tup
     impulse = jnp.zeros(n).at[0].set(1.0)
     ch = allpole_filter(theta, jnp.stack([w, impulse], axis=1), unroll=unroll)
     c, h = ch[:, 0], ch[:, 1]
+    index = jnp.arange(n)
+    if n_valid is not None:  # t >= n_valid: outside the series (see docstring)
+        c = jnp.where(index < n_valid, c, 0.0)
     D = _initial_state_drive(T, R, theta)  # (r, r): the non-zero rows of the drive
     k = min(r, n)
     Gc = jnp.stack([jnp.dot(h[: n - s], c[s:]) for s in range(k)])
+
+    def lagged(m: int, lag: int) -> Array:
+        """h_j for j < m, as h_{t-lag} at t = j + lag: zero where t is past the series."""
+        return h[:m] if n_valid is None else jnp.where(index[:m] + lag < n_valid, h[:m], 0.0)
+
     # H[s, u] = sum_{t < n} h_{t-s} h_{t-u} = h[u-s : n-s] . h[: n-u] for u >= s
-    H = jnp.stack([jnp.stack([jnp.dot(h[abs(u - s) : n - min(s, u)], h[: n - max(s, u)])
+    H = jnp.stack([jnp.stack([jnp.dot(h[abs(u - s) : n - min(s, u)],
+                                      lagged(n - max(s, u), max(s, u)))
                               for u in range(k)]) for s in range(k)])
     b = D[:k].T @ Gc
     M = D[:k].T @ H @ D[:k]
@@ -230,14 +245,15 @@ def arma_loglik(phi: Array, theta: Array, sigma2, x: Array, *, method: str = "fa
     return -0.5 * (n * jnp.log(2 * jnp.pi * sigma2) + slf + ssq / sigma2)
 
 
-def arma_profile_loglik(phi: Array, theta: Array, x: Array, *, unroll: int = 1
-                        ) -> tuple[Array, Array]:
+def arma_profile_loglik(phi: Array, theta: Array, x: Array, *, n_valid=None,
+                        unroll: int = 1) -> tuple[Array, Array]:
     """Log-likelihood maximised over sigma2, and that sigma2_hat = (1/n) sum v_t^2 / F~_t.
 
     log L_p = -1/2 [ n log(2 pi sigma2_hat) + sum log F~_t + n ].
+    ``n_valid``: the series is x_1..x_n of a longer array (:func:`profile_terms`).
     """
     x = jnp.asarray(x, dtype=float)
-    n = x.shape[-1]
-    slf, ssq = profile_terms(phi, theta, x, unroll=unroll)
+    n = x.shape[-1] if n_valid is None else n_valid
+    slf, ssq = profile_terms(phi, theta, x, n_valid=n_valid, unroll=unroll)
     s2 = ssq / n
     return -0.5 * (n * jnp.log(2 * jnp.pi * s2) + slf + n), s2

@@ -1,0 +1,29 @@
+"""Array lengths that compiled programs are built for: a series of n samples is held in
+``bucket_length(n)`` samples, its tail masked out, so records of nearby lengths share one
+program instead of compiling their own.
+
+A compiled ARMA fit costs ~5-7 s and ~1 100 memory maps of XLA:CPU code per order, a
+Kalman filter ~2 s; the padding costs at most a quarter more work per evaluation.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+
+def bucket_length(n: int) -> int:
+    """n rounded up to a multiple of 2^(floor(log2 n) - 2): four lengths per octave, at
+    most 25 % of padding (lengths below 8 are kept)."""
+    step = 1 << max(int(n).bit_length() - 3, 0)
+    return -(-int(n) // step) * step
+
+
+def padded(x, n_to: int):
+    """x (..., n) with zeros appended along the last axis to n_to samples (in NumPy unless
+    x is traced: a host copy costs less than dispatching a JAX pad, ~1 ms a call)."""
+    pad = [(0, 0)] * (jnp.ndim(x) - 1) + [(0, n_to - jnp.shape(x)[-1])]
+    if isinstance(x, jax.core.Tracer):
+        return jnp.pad(jnp.asarray(x, dtype=float), pad)
+    return np.pad(np.asarray(x, dtype=float), pad)
