@@ -129,10 +129,11 @@ def _long_ar_start(x: Array, n, m, *, p: int, q: int, mask_phi=None, mask_theta=
     return ArmaStart(coef[:p], -coef[p:], s2, m)
 
 
-def _neg_profile(u: Array, x: Array, n, p: int, mask: Array) -> Array:
+def _neg_profile(u: Array, x: Array, n_valid, p: int, mask: Array) -> Array:
     u = u * mask  # masked coordinates stay at PACF 0, i.e. coefficient 0
     phi, theta = unconstrained_to_params(u[:p], u[p:])
-    return -arma_profile_loglik(phi, theta, x, n_valid=n)[0] / n
+    n = x.shape[0] if n_valid is None else n_valid
+    return -arma_profile_loglik(phi, theta, x, n_valid=n_valid)[0] / n
 
 
 def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7,
@@ -163,7 +164,9 @@ def fit_padded(x: Array, n, m, *, p: int, q: int, max_iter=200, tol=1e-7,
                init: ArmaStart | None = None, mask_phi: Array | None = None,
                mask_theta: Array | None = None) -> ArmaFit:
     """:func:`fit_arma` of the series x[:n] held in a longer array x (traceable: n, the
-    long-AR order m, ``max_iter`` and ``tol`` may be traced; vmap it for many series)."""
+    long-AR order m, ``max_iter`` and ``tol`` may be traced; vmap it for many series).
+    n None: all of x, with no masks."""
+    n_valid, n = n, (x.shape[0] if n is None else n)
     mp = jnp.ones(p) if mask_phi is None else jnp.asarray(mask_phi, dtype=float)
     mq = jnp.ones(q) if mask_theta is None else jnp.asarray(mask_theta, dtype=float)
     mask = jnp.concatenate([mp, mq])
@@ -175,22 +178,22 @@ def fit_padded(x: Array, n, m, *, p: int, q: int, max_iter=200, tol=1e-7,
     if p + q == 0:
         u, it, gnorm = u0, jnp.asarray(0), jnp.asarray(0.0)
     else:
-        u, it, gnorm = _lbfgs(u0, x, n, p, mask, max_iter, tol)
+        u, it, gnorm = _lbfgs(u0, x, n_valid, p, mask, max_iter, tol)
     phi, theta = unconstrained_to_params(u[:p] * mp, u[p:] * mq)
-    ll, s2 = arma_profile_loglik(phi, theta, x, n_valid=n)
-    se_phi, se_theta = _standard_errors(phi, theta, x, n, mask)
+    ll, s2 = arma_profile_loglik(phi, theta, x, n_valid=n_valid)
+    se_phi, se_theta = _standard_errors(phi, theta, x, n_valid, mask)
     converged = (gnorm < tol) & jnp.isfinite(ll) & jnp.all(jnp.isfinite(u))
     return ArmaFit(phi, theta, s2, ll, se_phi, se_theta, s2 * jnp.sqrt(2.0 / n),
                    converged, it, gnorm)
 
 
-def _lbfgs(u0: Array, x: Array, n, p: int, mask: Array, max_iter, tol):
+def _lbfgs(u0: Array, x: Array, n_valid, p: int, mask: Array, max_iter, tol):
     """:func:`fogbayes.inference.lsq.minimize` to max |gradient| < tol (optax's default
     memory of 10); vmap runs it until every series has stopped. A non-finite gradient
     stops a series at once (not converged), where the loop written here before ran it on
     to ``max_iter``."""
-    res = minimize(partial(_neg_profile, x=x, n=n, p=p, mask=mask), u0, max_iter=max_iter,
-                   tol=tol, memory_size=10, grad_norm=_max_abs)
+    res = minimize(partial(_neg_profile, x=x, n_valid=n_valid, p=p, mask=mask), u0,
+                   max_iter=max_iter, tol=tol, memory_size=10, grad_norm=_max_abs)
     return res.params, res.n_iter.astype(int), res.grad_norm
 
 
@@ -199,7 +202,7 @@ def _max_abs(g: Array) -> Array:
     return jnp.where(jnp.isfinite(g), g, jnp.inf)
 
 
-def _standard_errors(phi: Array, theta: Array, x: Array, n, mask: Array
+def _standard_errors(phi: Array, theta: Array, x: Array, n_valid, mask: Array
                      ) -> tuple[Array, Array]:
     """sqrt(diag(-H^-1)) of the profile log-likelihood in (phi, theta); 0 where masked.
 
@@ -213,7 +216,7 @@ def _standard_errors(phi: Array, theta: Array, x: Array, n, mask: Array
     k = p + q
 
     def g(v):
-        return jax.grad(lambda w: arma_profile_loglik(w[:p], w[p:], x, n_valid=n)[0])(v)
+        return jax.grad(lambda w: arma_profile_loglik(w[:p], w[p:], x, n_valid=n_valid)[0])(v)
 
     v0 = jnp.concatenate([phi, theta])
     h = 1e-5
@@ -228,12 +231,15 @@ def _standard_errors(phi: Array, theta: Array, x: Array, n, mask: Array
 
 
 def fit_arma_batch(X: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7) -> ArmaFit:
-    """:func:`fit_arma` vmapped over the rows of X (many series of equal length), one call."""
-    n = jnp.shape(X)[-1]
-    return _fit_arma_batch(padded(X, bucket_length(n)), n, default_ar_order(n, p, q),
-                           max_iter, tol, p=p, q=q)
+    """:func:`fit_arma` vmapped over the rows of X (many series of equal length), one call.
+
+    A batch is compiled for its own length, without padding: its one compile is shared by
+    all its series, and the masks of a padded fit would cost ~13 % more per evaluation
+    (100 x 10 000 ARMA(2,1): 3.8 s -> 4.3 s warm)."""
+    X = jnp.asarray(X, dtype=float)
+    return _fit_arma_batch(X, default_ar_order(X.shape[-1], p, q), max_iter, tol, p=p, q=q)
 
 
 @partial(jax.jit, static_argnames=("p", "q"))
-def _fit_arma_batch(X: Array, n, m, max_iter, tol, *, p: int, q: int) -> ArmaFit:
-    return jax.vmap(lambda x: fit_padded(x, n, m, p=p, q=q, max_iter=max_iter, tol=tol))(X)
+def _fit_arma_batch(X: Array, m, max_iter, tol, *, p: int, q: int) -> ArmaFit:
+    return jax.vmap(lambda x: fit_padded(x, None, m, p=p, q=q, max_iter=max_iter, tol=tol))(X)
