@@ -62,8 +62,9 @@ def test_waic_and_loo_prefer_the_true_order():
 @pytest.mark.filterwarnings("ignore::UserWarning:arviz")  # WAIC/LOO of 60 draws: rough
 def test_warm_calls_reuse_the_compiled_sampler():
     # the series, the order masks and the prior scale are traced arguments: another series
-    # of the same length, another seed and every order inside the same padded (P, Q) = (1, 1)
-    # run the sampler and the pointwise likelihood compiled by the first call
+    # of the same length (or of the same length bucket), another seed and every order inside
+    # the same padded (P, Q) = (1, 1) run the sampler and the pointwise likelihood compiled
+    # by the first call
     x = _sim([0.5], [0.3], 120, 7)
     kw = {"num_warmup": 30, "num_samples": 30, "num_chains": 2}
     first = arma_posterior(x, p=1, q=1, seed=0, **kw)
@@ -71,8 +72,11 @@ def test_warm_calls_reuse_the_compiled_sampler():
     again = arma_posterior(x, p=1, q=1, seed=0, **kw)
     arma_posterior(1.5 * x[::-1], p=1, q=1, seed=1, **kw)
     c = compare_orders_bayes(x, [(1, 0), (0, 1), (1, 1)], seed=2, **kw)
+    # a series of another length in the same bucket (120 and 116 are both held in 128)
+    shorter = arma_posterior(_sim([0.5], [0.3], 116, 8), p=1, q=1, seed=3, **kw)
     assert arma_bayes.TRACES == traces
-    assert arma_bayes._sampler.cache_info().hits == hits + 5
+    assert arma_bayes._sampler.cache_info().hits == hits + 6
+    assert shorter.idata.log_likelihood["x"].shape == (2, 30, 116)  # its own samples only
     # same seed, same draws; the masks switch the absent coefficient off
     np.testing.assert_array_equal(first.idata.posterior["phi"], again.idata.posterior["phi"])
     assert c.posteriors[0].idata.posterior["theta"].values.max() == 0.0

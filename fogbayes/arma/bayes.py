@@ -17,8 +17,10 @@ sense; it ranks orders like the exact likelihood does.
 
 Orders are compared inside one padded shape (P, Q) with 0/1 masks; the masks, the series
 and the prior scale are traced arguments of one cached, jitted sampler (:func:`_sampler`),
-so it compiles once per (warm-up, draws, n, P, Q, chains) for the whole candidate set and
-for every later call of the same shapes.
+so it compiles once per (warm-up, draws, bucket of n, P, Q, chains) for the whole candidate
+set and for every later call of the same shapes. A series of n samples is held in
+``bucket_length(n)`` samples (:mod:`fogbayes.models.buckets`) with its tail masked out of
+the likelihood and the pointwise terms, so nearby lengths share the sampler too.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .model import arma_loglik, pacf_to_ar
+from ..models.buckets import bucket_length, padded
 from ..models.statespace import arma_state_space, kalman_filter
 from ..inference.convergence import converged, ess_floor
 
@@ -49,8 +52,9 @@ class ArmaPosterior(NamedTuple):
     converged: bool
 
 
-def arma_model(x, mask_phi, mask_theta, sigma_scale):
-    """NumPyro model (see module docstring); masks (P,), (Q,) of 0/1 select the order."""
+def arma_model(x, n_valid, mask_phi, mask_theta, sigma_scale):
+    """NumPyro model (see module docstring) of the series x[:n_valid]; masks (P,), (Q,) of
+    0/1 select the order."""
     import numpyro
     import numpyro.distributions as dist
 
@@ -63,7 +67,7 @@ def arma_model(x, mask_phi, mask_theta, sigma_scale):
     phi = numpyro.deterministic("phi", pacf_to_ar(r_phi * mask_phi))
     theta = numpyro.deterministic("theta", pacf_to_ar(r_theta * mask_theta))
     numpyro.deterministic("sigma2", sigma * sigma)
-    numpyro.factor("loglik", arma_loglik(phi, theta, sigma * sigma, x))
+    numpyro.factor("loglik", arma_loglik(phi, theta, sigma * sigma, x, n_valid=n_valid))
 
 
 #: times the sampler / the pointwise log-likelihood were traced (a Python side effect runs
@@ -71,22 +75,25 @@ def arma_model(x, mask_phi, mask_theta, sigma_scale):
 TRACES = {"sampler": 0, "pointwise": 0}
 
 
-def _one_step_terms(a, b, s2, x):
-    """log N(x_t; x^_{t|t-1}, s2 F~_t), t = 1..n, at one draw (Kalman filter)."""
+def _one_step_terms(a, b, s2, x, n_valid):
+    """log N(x_t; x^_{t|t-1}, s2 F~_t), t = 1..len(x), at one draw (Kalman filter; from
+    t = n_valid on the terms are not the series' and are cut off by the caller)."""
     TRACES["pointwise"] += 1
-    f = kalman_filter(arma_state_space(a, b, s2), x)
+    f = kalman_filter(arma_state_space(a, b, s2), x, n_valid=n_valid)
     return -0.5 * (jnp.log(2 * jnp.pi * f.innov_var) + f.innov ** 2 / f.innov_var)
 
 
 # module level, x an argument (not a closure): compiled once per shape, and a closed-over
 # series would become an XLA constant, folded at every compilation
-_pointwise = jax.jit(jax.vmap(_one_step_terms, in_axes=(0, 0, 0, None)))
+_pointwise = jax.jit(jax.vmap(_one_step_terms, in_axes=(0, 0, 0, None, None)))
 
 
 def pointwise_loglik(phi, theta, sigma2, x) -> jax.Array:
     """log N(x_t; x^_{t|t-1}, sigma2 F~_t) for each draw: phi (S, P), theta (S, Q) -> (S, n)."""
+    n = jnp.shape(x)[-1]
+    held = jnp.asarray(padded(x, bucket_length(n)))
     return _pointwise(jnp.asarray(phi, dtype=float), jnp.asarray(theta, dtype=float),
-                      jnp.asarray(sigma2, dtype=float), jnp.asarray(x, dtype=float))
+                      jnp.asarray(sigma2, dtype=float), held, n)[:, :n]
 
 
 def _masks(p, q, P, Q):
@@ -117,9 +124,9 @@ def _sampler(num_warmup: int, num_samples: int):
 
     from ..inference.nuts import chain_sampler, on_host
 
-    def run(keys, x, mask_phi, mask_theta, sigma_scale):
+    def run(keys, x, n_valid, mask_phi, mask_theta, sigma_scale):
         TRACES["sampler"] += 1
-        args = (x, mask_phi, mask_theta, sigma_scale)
+        args = (x, n_valid, mask_phi, mask_theta, sigma_scale)
         keys, k_init = jnp.swapaxes(jax.vmap(jax.random.split)(keys), 0, 1)
         info = initialize_model(k_init, arma_model, model_args=args, dynamic_args=True)
         # dense_mass=[]: what NUTS(model) passes for dense_mass=False (a diagonal mass per
@@ -140,7 +147,9 @@ def _run(x, p, q, P, Q, seed: int, num_warmup: int, num_samples: int,
     # as MCMC.run: one key per chain split from PRNGKey(seed) (a single chain: the key itself)
     key = jax.random.PRNGKey(seed)
     keys = jax.random.split(key, num_chains) if num_chains > 1 else key[None]
-    s, div = _sampler(int(num_warmup), int(num_samples))(keys, x, mp, mq, 2.0 * jnp.std(x))
+    n = x.shape[0]
+    held = jnp.asarray(padded(x, bucket_length(n)))
+    s, div = _sampler(int(num_warmup), int(num_samples))(keys, held, n, mp, mq, 2.0 * jnp.std(x))
     C, D = s["sigma"].shape
     ll = pointwise_loglik(s["phi"].reshape(C * D, P), s["theta"].reshape(C * D, Q),
                           s["sigma2"].reshape(C * D), x)

@@ -214,7 +214,7 @@ def profile_terms(phi: Array, theta: Array, x: Array, *, n_valid=None, unroll: i
 
 
 def arma_loglik(phi: Array, theta: Array, sigma2, x: Array, *, method: str = "fast",
-                unroll: int = 1) -> Array:
+                n_valid=None, unroll: int = 1) -> Array:
     """Exact Gaussian log-likelihood of zero-mean stationary ARMA(p, q) data x (n,).
 
     log L = -1/2 [ n log(2 pi sigma2) + log det Sigma~ + x' Sigma~^-1 x / sigma2 ]
@@ -226,7 +226,8 @@ def arma_loglik(phi: Array, theta: Array, sigma2, x: Array, *, method: str = "fa
     the Kalman filter of :mod:`fogbayes.models.statespace` (same number to ~1e-12,
     slower gradients). Differentiable in all arguments (x included, so it serves as the
     noise likelihood of residual = data - model), jit- and vmap-able. Non-stationary phi
-    gives NaN: keep |PACF| < 1, e.g. through :func:`pacf_to_ar`.
+    gives NaN: keep |PACF| < 1, e.g. through :func:`pacf_to_ar`. ``n_valid``: the series
+    is x_1..x_n of a longer array (:func:`profile_terms`).
 
     Example::
 
@@ -235,13 +236,14 @@ def arma_loglik(phi: Array, theta: Array, sigma2, x: Array, *, method: str = "fa
         arma_loglik(jnp.array([0.5]), jnp.zeros(0), 1.0, x)       # AR(1), no scan
     """
     x = jnp.asarray(x, dtype=float)
-    n = x.shape[-1]
+    n = x.shape[-1] if n_valid is None else n_valid
     sigma2 = jnp.asarray(sigma2, dtype=float)
     if method == "kalman":
-        return kalman_filter(arma_state_space(phi, theta, sigma2), x, unroll=unroll).loglik
+        return kalman_filter(arma_state_space(phi, theta, sigma2), x, n_valid=n_valid,
+                             unroll=unroll).loglik
     if method != "fast":
         raise ValueError(f"method must be 'fast' or 'kalman', got {method!r}")
-    slf, ssq = profile_terms(phi, theta, x, unroll=unroll)
+    slf, ssq = profile_terms(phi, theta, x, n_valid=n_valid, unroll=unroll)
     return -0.5 * (n * jnp.log(2 * jnp.pi * sigma2) + slf + ssq / sigma2)
 
 

@@ -110,10 +110,11 @@ def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, n_valid=None,
     a_t|t = a_t + K_t v_t, P_t|t = P_t - K_t P_t[0, :],
     a_{t+1} = T a_t|t, P_{t+1} = T P_t|t T' + sigma2 R R'.
 
-    ``n_valid`` (traced): only y_1..y_n are observed; later samples are treated as missing
-    (K_t = 0, no log-likelihood), so the filter at t < n, the log-likelihood and an RTS
-    smoother run over the whole array all equal those of y_1..y_n alone, and one program
-    serves every length up to len(y) (:mod:`fogbayes.models.buckets`).
+    ``n_valid`` (traced): only y_1..y_n are observed; later samples are missing, which is
+    h = inf there (F_t = inf, K_t = 0: no update; their F_t is returned as inf and they add
+    no log-likelihood). So the filter at t < n, the log-likelihood and an RTS smoother run
+    over the whole array equal those of y_1..y_n alone, and one program serves every
+    length up to len(y) (:mod:`fogbayes.models.buckets`).
     """
     T, R, sigma2 = ss
     phi_full = T[:, 0]
@@ -124,25 +125,26 @@ def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, n_valid=None,
 
     def step(carry, inp):
         a, P = carry
-        yt, observed = inp
-        F = P[0, 0] + h
+        yt, ht = inp if n_valid is not None else (inp, h)
+        F = P[0, 0] + ht
         v = yt - a[0]
         k = P[:, 0] / F
-        if n_valid is not None:  # a missing sample: no update, no likelihood
-            k = jnp.where(observed, k, 0.0)
         af = a + k * v
         Pf = P - jnp.outer(k, P[0])
         Pf = 0.5 * (Pf + Pf.T)
         an = apply_T(phi_full, af)
         Pn = apply_T(phi_full, apply_T(phi_full, Pf).T) + Q
-        ll = -0.5 * (jnp.log(2 * jnp.pi * F) + v * v / F)
-        if n_valid is not None:
-            ll = jnp.where(observed, ll, 0.0)
-        return (an, Pn), (a, P, af, Pf, v, F, ll)
+        return (an, Pn), (a, P, af, Pf, v, F)
 
     a0 = jnp.zeros(T.shape[0])
-    observed = jnp.ones(y.shape[0], bool) if n_valid is None else jnp.arange(y.shape[0]) < n_valid
-    _, (a, P, af, Pf, v, F, ll) = lax.scan(step, (a0, P0), (y, observed), unroll=unroll)
+    if n_valid is None:
+        inputs = y
+    else:  # a missing sample: infinite observation variance
+        inputs = (y, jnp.where(jnp.arange(y.shape[0]) < n_valid, h, jnp.inf))
+    _, (a, P, af, Pf, v, F) = lax.scan(step, (a0, P0), inputs, unroll=unroll)
+    ll = -0.5 * (jnp.log(2 * jnp.pi * F) + v * v / F)
+    if n_valid is not None:
+        ll = jnp.where(jnp.arange(y.shape[0]) < n_valid, ll, 0.0)
     return FilterResult(a, P, af, Pf, v, F, jnp.sum(ll))
 
 
