@@ -151,3 +151,19 @@ def test_bucket_lengths_pad_at_most_a_quarter():
         assert n <= b <= max(n, 1.25 * n), (n, b)
     # four lengths per octave: every length in (4096, 8192] rounds to one of four
     assert {bucket_length(n) for n in range(4097, 8193)} == {5120, 6144, 7168, 8192}
+
+
+def test_a_long_ar_order_above_the_default_is_used_not_capped():
+    """ar_order beyond the default of the series' bucket (1 536 samples: 32) fits that order:
+    the same start as the plain two-stage regressions written out here in NumPy."""
+    x = _sim([0.6], [-0.5], 12)
+    m = 60
+    s = long_ar_start(jnp.array(x), p=1, q=1, ar_order=m)
+    lag = lambda v, k, t0: np.stack([v[t0 - j : len(v) - j] for j in range(1, k + 1)], axis=1)
+    psi = np.linalg.lstsq(lag(x, m, m), x[m:], rcond=None)[0]
+    a = np.r_[np.zeros(m), x[m:] - lag(x, m, m) @ psi]
+    X = np.c_[lag(x, 1, m + 1), lag(a, 1, m + 1)]
+    coef = np.linalg.lstsq(X, x[m + 1 :], rcond=None)[0]
+    np.testing.assert_allclose([float(s.phi[0]), float(s.theta[0])], [coef[0], -coef[1]],
+                               rtol=1e-8)
+    assert int(s.ar_order) == m

@@ -101,14 +101,17 @@ def long_ar_start(x: Array, *, p: int, q: int, ar_order: int | None = None,
     """
     n = jnp.shape(x)[0]
     m = default_ar_order(n, p, q) if ar_order is None else int(ar_order)
-    return _long_ar_start(padded(x, bucket_length(n)), n, m, p=p, q=q, mask_phi=mask_phi,
-                          mask_theta=mask_theta)
+    N = bucket_length(n)
+    return _long_ar_start(padded(x, N), n, m, p=p, q=q, mask_phi=mask_phi,
+                          mask_theta=mask_theta, max_order=max(m, default_ar_order(N, p, q)))
 
 
-@partial(jax.jit, static_argnames=("p", "q"))
-def _long_ar_start(x: Array, n, m, *, p: int, q: int, mask_phi=None, mask_theta=None
-                   ) -> ArmaStart:
-    """:func:`long_ar_start` of x[:n] inside the padded x (n and the long-AR order m traced)."""
+@partial(jax.jit, static_argnames=("p", "q", "max_order"))
+def _long_ar_start(x: Array, n, m, *, p: int, q: int, mask_phi=None, mask_theta=None,
+                   max_order: int | None = None) -> ArmaStart:
+    """:func:`long_ar_start` of x[:n] inside the padded x (n and the long-AR order m traced,
+    m <= ``max_order``, by default the order of len(x), which is >= the default order of any
+    shorter series: it never decreases with n)."""
     N = x.shape[0]
     t = jnp.arange(N)
     mp = jnp.ones(p) if mask_phi is None else jnp.asarray(mask_phi, dtype=float)
@@ -117,7 +120,7 @@ def _long_ar_start(x: Array, n, m, *, p: int, q: int, mask_phi=None, mask_theta=
         phi, s2 = _ols(_lags(x, p), x, ((t >= p) & (t < n)).astype(float), mp)
         return ArmaStart(phi, jnp.zeros(0), s2, m)
     # stage 1: AR(m) on t = m..n-1; m is traced, so the AR(M) shapes hold it with a mask
-    M = default_ar_order(N, p, q)  # >= the order of any length <= N (it never decreases)
+    M = default_ar_order(N, p, q) if max_order is None else max_order
     long_rows = ((t >= m) & (t < n)).astype(float)
     L = _lags(x, M) * (jnp.arange(M) < m)
     psi, _ = _ols(L, x, long_rows, (jnp.arange(M) < m).astype(float))
