@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .model import arma_loglik, pacf_to_ar
-from ..models.buckets import bucket_length, padded
+from ..models.buckets import held
 from ..models.statespace import arma_state_space, kalman_filter
 from ..inference.convergence import converged, ess_floor
 
@@ -90,10 +90,9 @@ _pointwise = jax.jit(jax.vmap(_one_step_terms, in_axes=(0, 0, 0, None, None)))
 
 def pointwise_loglik(phi, theta, sigma2, x) -> jax.Array:
     """log N(x_t; x^_{t|t-1}, sigma2 F~_t) for each draw: phi (S, P), theta (S, Q) -> (S, n)."""
-    n = jnp.shape(x)[-1]
-    held = jnp.asarray(padded(x, bucket_length(n)))
+    xb, n = held(x)
     return _pointwise(jnp.asarray(phi, dtype=float), jnp.asarray(theta, dtype=float),
-                      jnp.asarray(sigma2, dtype=float), held, n)[:, :n]
+                      jnp.asarray(sigma2, dtype=float), jnp.asarray(xb), n)[:, :n]
 
 
 def _masks(p, q, P, Q):
@@ -147,9 +146,9 @@ def _run(x, p, q, P, Q, seed: int, num_warmup: int, num_samples: int,
     # as MCMC.run: one key per chain split from PRNGKey(seed) (a single chain: the key itself)
     key = jax.random.PRNGKey(seed)
     keys = jax.random.split(key, num_chains) if num_chains > 1 else key[None]
-    n = x.shape[0]
-    held = jnp.asarray(padded(x, bucket_length(n)))
-    s, div = _sampler(int(num_warmup), int(num_samples))(keys, held, n, mp, mq, 2.0 * jnp.std(x))
+    xb, n = held(x)
+    s, div = _sampler(int(num_warmup), int(num_samples))(keys, jnp.asarray(xb), n, mp, mq,
+                                                         2.0 * jnp.std(x))
     C, D = s["sigma"].shape
     ll = pointwise_loglik(s["phi"].reshape(C * D, P), s["theta"].reshape(C * D, Q),
                           s["sigma2"].reshape(C * D), x)

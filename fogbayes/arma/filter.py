@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ArgumentError
-from ..models.buckets import bucket_length, padded
+from ..models.buckets import held
 from ..models.statespace import arma_state_space, kalman_filter, rts_smoother
 
 
@@ -55,8 +55,8 @@ class Denoised(NamedTuple):
 def _filter(ss, x: np.ndarray, obs_var=0.0):
     """The Kalman filter of x, run inside ``bucket_length(n)`` samples (the tail missing)
     so that nearby lengths share one compiled filter; outputs cover the whole array."""
-    n = x.shape[0]
-    return kalman_filter(ss, padded(x, bucket_length(n)), obs_var, n_valid=n)
+    xb, n = held(x)
+    return kalman_filter(ss, xb, obs_var, n_valid=n)
 
 
 def one_step_prediction(phi, theta, sigma2, x) -> OneStep:

@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 
 from ..inference.lsq import minimize
-from ..models.buckets import bucket_length, padded
+from ..models.buckets import bucket_length, held, padded
 from .model import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
 
 Array = jax.Array
@@ -151,8 +151,8 @@ def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7
     One compiled program per (p, q) and bucket length (:mod:`fogbayes.models.buckets`);
     ``max_iter`` and ``tol`` are its arguments, not constants.
     """
-    n = jnp.shape(x)[0]
-    return _fit_arma(padded(x, bucket_length(n)), n, default_ar_order(n, p, q), max_iter,
+    xb, n = held(x)
+    return _fit_arma(xb, n, default_ar_order(n, p, q), max_iter,
                      tol, p=p, q=q, init=init, mask_phi=mask_phi, mask_theta=mask_theta)
 
 

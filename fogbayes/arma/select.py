@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..models.buckets import bucket_length, padded
+from ..models.buckets import held
 from .fit import ArmaFit, default_ar_order, fit_padded
 
 Array = jax.Array
@@ -104,7 +104,7 @@ def select_order(x, candidates=PAPER_CANDIDATES, *, max_iter: int = 200) -> Orde
     n = x.shape[-1]
     # held in bucket_length(n) samples: one compiled program serves nearby lengths
     m = default_ar_order(n, P, Q)
-    x = jnp.asarray(padded(x, bucket_length(n)))
+    x = jnp.asarray(held(x)[0])
     # Candidates run one after another through one compiled function (the masks are
     # arguments): vmapping them would make every candidate wait for the slowest to
     # converge (measured 4x more likelihood evaluations on the p, q <= 3 grid).
