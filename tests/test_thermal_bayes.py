@@ -126,3 +126,54 @@ def test_order_selection_by_loo_under_ar_noise():
     sel = doc["order_selection"]
     assert sel["candidates"] == [[1, 1], [2, 1]] and sel["criterion"].startswith("elpd_loo")
     assert sel["best"] == [2, 1] and sel["scores"][1] > sel["scores"][0] + 5  # measured 82.1 vs 67.7
+
+
+def _ar1_exact_loglik(r, phi, sigma):
+    """Exact AR(1) log-likelihood in NumPy: r_1 ~ N(0, s2 / (1 - phi^2)), then
+    r_t | r_(t-1) ~ N(phi r_(t-1), s2) (the independent reference of the Kalman terms)."""
+    s2 = sigma ** 2
+    v0 = s2 / (1 - phi ** 2)
+    ll = -0.5 * (np.log(2 * np.pi * v0) + r[0] ** 2 / v0)
+    e = r[1:] - phi * r[:-1]
+    return ll - 0.5 * np.sum(np.log(2 * np.pi * s2) + e ** 2 / s2)
+
+
+def test_a_record_of_another_length_in_the_bucket_reuses_the_sampler_exactly():
+    """A single fit holds its blocks in bucket_length(n) (one compiled sampler for nearby
+    lengths); the padded log density equals the unpadded one and the pointwise terms are the
+    record's own (their sum per draw is the exact AR(1) likelihood of its residual)."""
+    import jax
+    import jax.numpy as jnp
+
+    from fogbayes.inference import bayes as fb
+    from fogbayes.models.buckets import bucket_length
+
+    assert bucket_length(220) == bucket_length(210) == 224
+    X, y = _ar_data()  # 220 blocks: the sampler compiled by the reference test above
+    fit_linear_bayes(X, y, seed=0, noise="ar", p=1, num_warmup=300, num_samples=500)
+    misses = fb._sampler.cache_info().misses
+    Xs, ys = X[:210], y[:210]
+    short = fit_linear_bayes(Xs, ys, seed=0, noise="ar", p=1, num_warmup=300, num_samples=500)
+    assert fb._sampler.cache_info().misses == misses  # the 210-block record compiled nothing
+    ll = np.asarray(short.idata.log_likelihood["y"])
+    assert ll.shape[-1] == 210
+    post = short.idata.posterior
+    beta = np.asarray(post["beta"])[0, :3]
+    phi, sigma = np.asarray(post["phi"])[0, :3, 0], np.asarray(post["sigma"])[0, :3]
+    for k in range(3):
+        ref = _ar1_exact_loglik(ys - Xs @ beta[k], phi[k], sigma[k])
+        assert ll[0, k].sum() == pytest.approx(ref, rel=1e-10)
+    # the density the sampler sees: padded with n_valid == the record alone (and gradients)
+    rng = np.random.default_rng(3)
+    for p_ar in (0, 1):
+        u = {"beta": jnp.asarray(rng.normal(size=(1, 4))), "log_sigma": jnp.asarray([-0.5]),
+             "u_ar": jnp.asarray(rng.normal(size=(1, p_ar))), "u_ma": jnp.zeros((1, 0))}
+        Xb, yb = np.zeros((1, 224, 4)), np.zeros((1, 224))
+        Xb[0, :210], yb[0, :210] = Xs, ys
+        val, grad = jax.value_and_grad(fb._log_density)(u, jnp.asarray(Xb), jnp.asarray(yb),
+                                                        210, 10.0)
+        ref, gref = jax.value_and_grad(fb._log_density)(u, jnp.asarray(Xs[None]),
+                                                        jnp.asarray(ys[None]), 210, 10.0)
+        assert float(val) == pytest.approx(float(ref), rel=1e-12)
+        for key in u:
+            np.testing.assert_allclose(grad[key], gref[key], rtol=1e-10, atol=1e-12)

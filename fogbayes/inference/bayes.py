@@ -15,6 +15,10 @@ coloured (bias instability, Markov noise); assuming white noise treats n correla
 means as independent and gives intervals too narrow by about sqrt((1 + phi)/(1 - phi)) for
 AR(1) noise -- the coverage test in ``tests/test_thermal_bayes.py`` measures it.
 
+A single fit holds its series in ``bucket_length(n)`` samples (:mod:`fogbayes.models.buckets`)
+with the tail masked out of the likelihood (``n_valid``), so records of nearby lengths share
+one compiled sampler; a batch keeps its own length (its one compile serves every sensor).
+
 Pointwise log-likelihoods for WAIC/LOO are the one-step-ahead predictive densities
 log N(v_t; 0, F_t) from the Kalman filter (their sum is the exact likelihood). For time
 series this is a leave-one-step-ahead score, the usual reading of LOO on such data.
@@ -38,6 +42,7 @@ from .convergence import converged, ess_floor
 
 from ..errors import FogbayesError
 from ..models.arma import arma_loglik, pacf_to_ar
+from ..models.buckets import bucket_length
 from ..models.statespace import arma_state_space, kalman_filter
 
 
@@ -83,36 +88,40 @@ def _constrain(u: dict) -> dict:
             "phi": pacf_to_ar(jnp.tanh(u["u_ar"])), "theta": pacf_to_ar(jnp.tanh(u["u_ma"]))}
 
 
-def _log_density(u: dict, X, y, prior_scale: float):
+def _log_density(u: dict, X, y, n_valid, prior_scale: float):
     """Log posterior density (up to a constant) of K independent sensors in unconstrained
-    coordinates, Jacobians included (module doc; priors as written there)."""
+    coordinates, Jacobians included (module doc; priors as written there), of the first
+    ``n_valid`` samples of X (K, n, p), y (K, n)."""
     c = _constrain(u)
     lp = jnp.sum(dist.Normal(0.0, prior_scale).log_prob(u["beta"]))
     lp += jnp.sum(dist.HalfNormal(1.0).log_prob(c["sigma"]) + u["log_sigma"])
     lp += jnp.sum(_log1m_tanh2(u["u_ar"])) + jnp.sum(_log1m_tanh2(u["u_ma"]))  # Uniform(-1, 1)
     resid = y - jnp.einsum("knp,kp->kn", X, u["beta"])
     if u["u_ar"].shape[1] == 0 and u["u_ma"].shape[1] == 0:
-        return lp + jnp.sum(dist.Normal(0.0, c["sigma"][:, None]).log_prob(resid))
-    return lp + jnp.sum(jax.vmap(arma_loglik)(c["phi"], c["theta"], c["sigma"] ** 2, resid))
+        seen = jnp.arange(y.shape[1]) < n_valid
+        return lp + jnp.sum(jnp.where(seen, dist.Normal(0.0, c["sigma"][:, None]).log_prob(resid),
+                                      0.0))
+    ll = jax.vmap(lambda a, b, s2, r: arma_loglik(a, b, s2, r, n_valid=n_valid))
+    return lp + jnp.sum(ll(c["phi"], c["theta"], c["sigma"] ** 2, resid))
 
 
 @lru_cache(maxsize=16)
 def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: int,
              target_accept: float, shape: tuple[int, int, int]):
-    """``run(keys (chains, 2), X, y) -> (samples, diverging)``, compiled once per configuration
-    and data shape: :func:`fogbayes.inference.nuts.chain_sampler` on the log density above
+    """``run(keys (chains, 2), X, y, n_valid) -> (samples, diverging)``, compiled once per
+    configuration and data shape (``n_valid`` is traced: any length held in the shape): :func:`fogbayes.inference.nuts.chain_sampler` on the log density above
     (diagonal mass; chains one after another, ``lax.map``), started uniform(-2, 2) in the
     unconstrained space as NumPyro's ``init_to_uniform``."""
     K, _, n_coef = shape
     shapes = {"beta": (K, n_coef), "log_sigma": (K,), "u_ar": (K, p), "u_ma": (K, q)}
 
-    def potential_gen(X, y):
-        return lambda u: -_log_density(u, X, y, prior_scale)
+    def potential_gen(X, y, n_valid):
+        return lambda u: -_log_density(u, X, y, n_valid, prior_scale)
 
     sample = chain_sampler(potential_gen, num_warmup, num_samples,
                            target_accept_prob=target_accept, dense_mass=False,
                            chain_method="sequential",
-                           postprocess=lambda u, X, y: _constrain(u), jit=False)
+                           postprocess=lambda u, X, y, n_valid: _constrain(u), jit=False)
 
     def start(key):
         k_init, k_run = jax.random.split(key)
@@ -120,9 +129,9 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
         return k_run, {k: jax.random.uniform(ks[k], shp, minval=-2.0, maxval=2.0)
                        for k, shp in shapes.items()}
 
-    def run(keys, X, y):
+    def run(keys, X, y, n_valid):
         k_run, z0 = jax.vmap(start)(keys)
-        return sample(k_run, z0, X, y)
+        return sample(k_run, z0, X, y, n_valid)
 
     return on_host(jax.jit(run))
 
@@ -136,12 +145,13 @@ def noise_orders(noise: str, p: int, q: int) -> tuple[int, int]:
                         fix="use noise='white', noise='ar' with p >= 1, or noise='arma'")
 
 
-def _pointwise(beta, sigma, phi, theta, X, y):
-    """One-step-ahead log densities (n,) for one draw (white noise: plain normal densities)."""
+def _pointwise(beta, sigma, phi, theta, X, y, n_valid):
+    """One-step-ahead log densities (n,) for one draw (white noise: plain normal densities);
+    from ``n_valid`` on they are not the series' and are cut off by the caller."""
     r = y - X @ beta
     if phi.shape[0] == 0 and theta.shape[0] == 0:
         return -0.5 * (jnp.log(2 * jnp.pi * sigma**2) + (r / sigma) ** 2)
-    f = kalman_filter(arma_state_space(phi, theta, sigma**2), r)
+    f = kalman_filter(arma_state_space(phi, theta, sigma**2), r, n_valid=n_valid)
     return -0.5 * (jnp.log(2 * jnp.pi * f.innov_var) + f.innov**2 / f.innov_var)
 
 
@@ -165,12 +175,14 @@ def convergence_of(idata, var_names, num_chains: int) -> list[Convergence]:
 def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q: int = 0,
                            num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 2,
                            level: float = 0.9, prior_scale: float = 10.0,
-                           target_accept: float = 0.85, pointwise: bool = False) -> BayesFit:
+                           target_accept: float = 0.85, pointwise: bool = False,
+                           bucket: bool = False) -> BayesFit:
     """Posteriors of K independent sensors ``y_k = X_k beta_k + e_k`` in one NUTS run.
 
     The joint posterior factorises over sensors, so each sensor's marginal is exactly its
     own posterior; one compiled sampler then serves a whole batch (fleets, coverage
     studies). X: (K, n, p), y: (K, n); same options as :func:`fit_linear_bayes`.
+    ``bucket``: hold the n samples in ``bucket_length(n)`` (module doc).
     """
     import arviz as az
 
@@ -179,10 +191,16 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
     my = y.mean(axis=1)
     sy = np.where(y.std(axis=1) > 0, y.std(axis=1), 1.0)
     const = np.flatnonzero((np.ptp(X[0], axis=0) == 0) & (X[0, 0] != 0))
+    K, n, n_coef = X.shape
+    nb = bucket_length(n) if bucket else n
+    Xb = np.zeros((K, nb, n_coef))
+    Xb[:, :n] = X
+    yb = np.zeros((K, nb))
+    yb[:, :n] = (y - my[:, None]) / sy[:, None]
     run = _sampler(p, q, float(prior_scale), int(num_warmup), int(num_samples),
-                   float(target_accept), X.shape)
+                   float(target_accept), Xb.shape)
     keys = jax.random.split(jax.random.PRNGKey(int(seed)), int(num_chains))
-    s, diverging = run(keys, jnp.asarray(X), jnp.asarray((y - my[:, None]) / sy[:, None]))
+    s, diverging = run(keys, jnp.asarray(Xb), jnp.asarray(yb), n)
     beta = np.asarray(s["beta"]) * sy[:, None]  # (chain, draw, K, p)
     if const.size:  # the intercept carries the mean taken out by the standardisation
         beta[..., const[0]] += my / X[:, 0, const[0]]
@@ -194,7 +212,7 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
     stats = {"diverging": np.asarray(diverging)}
     groups = {"posterior": post, "sample_stats": stats, "observed_data": {"y": y}}
     if pointwise:
-        groups["log_likelihood"] = {"y": _pointwise_all(post, X, y)}
+        groups["log_likelihood"] = {"y": _pointwise_all(post, X, y, bucket)}
     idata = az.from_dict(**groups)
     conv = convergence_of(idata, [v for v in ("beta", "sigma", "phi", "theta") if v in post],
                           num_chains)
@@ -209,18 +227,25 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
 
 
 #: over draws (outer) and sensors (inner); compiled once per shape
-_pointwise_draws = jax.jit(jax.vmap(jax.vmap(_pointwise), in_axes=(0, 0, 0, 0, None, None)))
+_pointwise_draws = jax.jit(jax.vmap(jax.vmap(_pointwise, in_axes=(0, 0, 0, 0, 0, 0, None)),
+                                    in_axes=(0, 0, 0, 0, None, None, None)))
 
 
-def _pointwise_all(post: dict, X: np.ndarray, y: np.ndarray) -> np.ndarray:
+def _pointwise_all(post: dict, X: np.ndarray, y: np.ndarray, bucket: bool) -> np.ndarray:
     """Pointwise log-likelihood (chain, draw, K, n) of every draw of every sensor."""
     beta = post["beta"]
     c, d, K = beta.shape[:3]
+    n = y.shape[1]
+    nb = bucket_length(n) if bucket else n
     empty = np.zeros((c, d, K, 0))
     args = [jnp.asarray(a).reshape((c * d,) + a.shape[2:])
             for a in (beta, post["sigma"], post.get("phi", empty), post.get("theta", empty))]
-    ll = _pointwise_draws(*args, jnp.asarray(X), jnp.asarray(y))
-    return np.asarray(ll).reshape(c, d, K, -1)
+    Xb = np.zeros((K, nb, X.shape[2]))
+    Xb[:, :n] = X
+    yb = np.zeros((K, nb))
+    yb[:, :n] = y
+    ll = _pointwise_draws(*args, jnp.asarray(Xb), jnp.asarray(yb), n)
+    return np.asarray(ll)[..., :n].reshape(c, d, K, n)
 
 
 def fit_linear_bayes(X, y, *, seed: int, noise: str = "ar", p: int = 1, q: int = 0,
@@ -243,7 +268,7 @@ def fit_linear_bayes(X, y, *, seed: int, noise: str = "ar", p: int = 1, q: int =
                                noise=noise, p=p, q=q, num_warmup=num_warmup,
                                num_samples=num_samples, num_chains=num_chains, level=level,
                                prior_scale=prior_scale, target_accept=target_accept,
-                               pointwise=pointwise)
+                               pointwise=pointwise, bucket=True)
     post = {k: v[:, :, 0] for k, v in b.idata.posterior.data_vars.items()}
     groups = {"posterior": {k: np.asarray(v) for k, v in post.items()},
               "sample_stats": {"diverging": np.asarray(b.idata.sample_stats["diverging"])},
