@@ -167,6 +167,8 @@ def oracle_row(row: dict) -> dict:
     terms = list(base) + ([tm] if tm is not None else [])
     out["err_free"] = err(_fit(ctx, spec, terms)[0])
     tm_gm = free_term(ctx, gm, base, row["right"]) if gm.n_markov else tm
+    out["free_term_gm"] = None if tm_gm is None else {"kind": tm_gm.kind, **{
+        k: v for k, v in tm_gm.params.items() if isinstance(v, (int, float, str))}}
     terms_gm = list(base) + ([tm_gm] if tm_gm is not None else [])
     out["err_free_gm"] = err(_fit(ctx, gm, terms_gm)[0]) if gm.n_markov else out["err_free"]
     return out
@@ -190,7 +192,7 @@ def summarise(rows: list[dict]) -> str:
     best = sum(r["err_loop"] <= 1.3 * min(r[k] for k in ("err_known", "err_known_gm", "err_free",
                                                             "err_free_gm")) for r in rows)
     lines += ["", f"loop <= 1.3x the best of the four: {best}/{n}", "",
-              "| shape | run | axis | rev | free term | loop | plain | known | known_gm | free "
+              "| shape | run | axis | rev | free term (base noise) | loop | plain | known | known_gm | free "
               "| free_gm | loop/known | loop/free_gm |", "|" + " --- |" * 13]
     for r in rows:
         if r["err_loop"] > 1.3 * r["err_known"] or r["err_known"] > 1.1 * r["err_plain"]:
