@@ -136,6 +136,13 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
     return on_host(jax.jit(run))
 
 
+def _held(X: np.ndarray, y: np.ndarray, bucket: bool):
+    """X (K, n, p), y (K, n) with zero samples appended to ``bucket_length(n)`` (``bucket``)."""
+    n = y.shape[1]
+    nb = bucket_length(n) if bucket else n
+    return np.pad(X, ((0, 0), (0, nb - n), (0, 0))), np.pad(y, ((0, 0), (0, nb - n)))
+
+
 def noise_orders(noise: str, p: int, q: int) -> tuple[int, int]:
     if noise == "white":
         return 0, 0
@@ -191,12 +198,8 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
     my = y.mean(axis=1)
     sy = np.where(y.std(axis=1) > 0, y.std(axis=1), 1.0)
     const = np.flatnonzero((np.ptp(X[0], axis=0) == 0) & (X[0, 0] != 0))
-    K, n, n_coef = X.shape
-    nb = bucket_length(n) if bucket else n
-    Xb = np.zeros((K, nb, n_coef))
-    Xb[:, :n] = X
-    yb = np.zeros((K, nb))
-    yb[:, :n] = (y - my[:, None]) / sy[:, None]
+    n = y.shape[1]
+    Xb, yb = _held(X, (y - my[:, None]) / sy[:, None], bucket)
     run = _sampler(p, q, float(prior_scale), int(num_warmup), int(num_samples),
                    float(target_accept), Xb.shape)
     keys = jax.random.split(jax.random.PRNGKey(int(seed)), int(num_chains))
@@ -236,14 +239,10 @@ def _pointwise_all(post: dict, X: np.ndarray, y: np.ndarray, bucket: bool) -> np
     beta = post["beta"]
     c, d, K = beta.shape[:3]
     n = y.shape[1]
-    nb = bucket_length(n) if bucket else n
     empty = np.zeros((c, d, K, 0))
     args = [jnp.asarray(a).reshape((c * d,) + a.shape[2:])
             for a in (beta, post["sigma"], post.get("phi", empty), post.get("theta", empty))]
-    Xb = np.zeros((K, nb, X.shape[2]))
-    Xb[:, :n] = X
-    yb = np.zeros((K, nb))
-    yb[:, :n] = y
+    Xb, yb = _held(X, y, bucket)
     ll = _pointwise_draws(*args, jnp.asarray(Xb), jnp.asarray(yb), n)
     return np.asarray(ll)[..., :n].reshape(c, d, K, n)
 
