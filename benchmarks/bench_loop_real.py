@@ -120,8 +120,9 @@ def _err(t, model_det, true_det, flag) -> float:
     return block_rms(t, d - np.mean(d[~flag]), flag)
 
 
-def oracle(ctx, base, effect_col):
-    """True-form GLS fit: base terms + the planted effect's true shape (free amplitude)."""
+def oracle(ctx, base, effect_col, spec=None):
+    """True-form GLS fit: base terms + the planted effect's true shape (free amplitude),
+    under the noise structure ``spec`` (default: the loop's base one)."""
     from fogbayes.diagnose.terms import design
     from fogbayes.inference import noise_fit as nfit
 
@@ -130,7 +131,7 @@ def oracle(ctx, base, effect_col):
     if effect_col is not None:
         X = np.column_stack([X, ctx.grid.mean(effect_col)])
         F = np.column_stack([F, effect_col])
-    nf = nfit.fit_noise(ctx.spec, ctx.y, X, ctx.grid.mask, ctx.grid.w)
+    nf = nfit.fit_noise(spec or ctx.spec, ctx.y, X, ctx.grid.mask, ctx.grid.w)
     return F @ nf.beta, nf.loglik
 
 

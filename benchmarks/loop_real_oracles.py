@@ -19,11 +19,10 @@ all with the base terms of ``bias-t``:
   stored ``err_oracle``: a check that the record and context are rebuilt exactly);
 * ``known_gm``: the same, with as many free Gauss-Markov components in the noise as the
   loop's final noise model has (the loop re-chooses its noise; the yardstick does not);
-* ``free``: told the *effect*, not its parameter: the loop's own candidate family for the
-  right effect (``diagnose.candidates``), its parameter profiled by GLS likelihood
-  (every grid value at the base noise fit's hyperparameters, then a golden-section search
-  in log parameter between the best value's neighbours, then a full noise refit at the
-  maximum); for an effect without a searched parameter this is the loop's term for it;
+* ``free``: told the *effect*, not its parameter: the loop's own estimate of it
+  (:func:`free_fit`: its candidate family, screened, refined and polished as the loop
+  places an accepted term); for an effect without a searched parameter this is the
+  loop's term for it;
 * ``free_gm``: ``free`` with the loop's number of Gauss-Markov components.
 
 Error against the truth as in ``bench_loop_real``: RMS of 10 s block means of (fitted
@@ -34,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
@@ -49,92 +47,37 @@ import bench_loop_real as blr  # noqa: E402
 
 ROWS = os.path.join(HERE, "loop_real_3a02c71.json")
 DEFAULT_OUT = os.path.join(HERE, "loop_real_oracles_3cd2bc9.json")
-#: the continuous parameter of each searched term kind (refined in log space)
-CONTINUOUS = {"drift_exp": "tau", "lag": "tau", "hysteresis": "r0", "play": "width"}
+def free_fit(ctx, spec, base, effect):
+    """The loop's own estimate of ``effect`` when told it is there: its candidate family
+    (``diagnose.candidates``) scored at the base fit's noise (``refine.local_stats``), the
+    best value refined between its grid neighbours (``refine.refine``), refitted and
+    polished under the refit's noise (``refine.polish``), as the loop places an accepted
+    term. None where the record offers no such candidate."""
+    from fogbayes.diagnose.candidates import Candidate, candidates_for
+    from fogbayes.diagnose.evidence import Screened, whitened_model
+    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.diagnose.refine import local_stats, polish, refine
 
-
-def _fit(ctx, spec, terms, *, col=None):
-    """GLS noise fit of ``terms`` (+ ``col``, one per-sample column) -> (deterministic
-    part, loglik, fit)."""
-    from fogbayes.diagnose.terms import design
-    from fogbayes.inference import noise_fit as nfit
-
-    X = ctx.block_design(list(terms)) if terms else np.zeros((ctx.y.size, 0))
-    F = design(list(terms), ctx.cov) if terms else np.zeros((ctx.rate.size, 0))
-    if col is not None:
-        X = np.column_stack([X, ctx.grid.mean(col)])
-        F = np.column_stack([F, col])
-    nf = nfit.fit_noise(spec, ctx.y, X, ctx.grid.mask, ctx.grid.w)
-    return F @ nf.beta, nf.loglik, nf
-
-
-def _profile(ctx, spec, theta, base, grid):
-    """Log-likelihood of base + each grid term at fixed noise hyperparameters ``theta``
-    (one filter pass: the Kalman filter is linear, so each column's innovations are its own)."""
-    from fogbayes.inference.noise_ssm import filter_padded, profile_np
-
-    Xb = ctx.block_design(list(base))
-    cols = [ctx.block_columns(tm) for tm in grid]
-    widths = [c.shape[1] for c in cols]
-    Y = np.column_stack([np.where(ctx.grid.mask > 0, ctx.y, 0.0), Xb] + cols)
-    V, F = filter_padded(spec, theta, Y, ctx.grid.mask, ctx.grid.w)
-    nb, out, j = 1 + Xb.shape[1], [], 1 + Xb.shape[1]
-    for wd in widths:
-        idx = list(range(nb)) + list(range(j, j + wd))
-        out.append(profile_np(V[:, idx], F, ctx.grid.mask)[0])
-        j += wd
-    return np.asarray(out)
-
-
-def _refine(ctx, spec, theta, base, grid, k):
-    """Golden-section search in log(parameter) between grid[k]'s neighbours (same kind)."""
-    from fogbayes.diagnose.terms import Term
-
-    tm = grid[k]
-    key = CONTINUOUS.get(tm.kind)
-    same = [g for g in grid if g.kind == tm.kind]
-    if key is None or len(same) < 2:
-        return tm
-    vals = sorted(g.params[key] for g in same)
-    i = vals.index(tm.params[key])
-    lo = math.log(vals[max(i - 1, 0)])
-    hi = math.log(vals[min(i + 1, len(vals) - 1)])
-
-    def at(u):
-        return Term(tm.kind, {**tm.params, key: float(math.exp(u))})
-
-    def ll(u):
-        return float(_profile(ctx, spec, theta, base, [at(u)])[0])
-
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    a, b = lo, hi
-    c, d = b - g * (b - a), a + g * (b - a)
-    fc, fd = ll(c), ll(d)
-    for _ in range(20):  # interval shrinks by 0.618^20 ~ 7e-5 of a grid step in log
-        if fc > fd:
-            b, d, fd = d, c, fc
-            c = b - g * (b - a)
-            fc = ll(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + g * (b - a)
-            fd = ll(d)
-    best = max([(fc, c), (fd, d), (ll(math.log(tm.params[key])), math.log(tm.params[key]))])
-    return at(best[1])
-
-
-def free_term(ctx, spec, base, effect):
-    """The loop's term for ``effect`` with its parameter at the GLS profile maximum."""
-    from fogbayes.diagnose.candidates import candidates_for
-
-    cands = candidates_for(ctx, list(base), effects=(effect,))
-    grid = [tm for c in cands for tm in c.grid]
+    grid = tuple(tm for c in candidates_for(ctx, list(base), effects=(effect,)) for tm in c.grid)
     if not grid:
         return None
-    _, _, nf0 = _fit(ctx, spec, base)
-    lls = _profile(ctx, spec, nf0.theta, base, grid)
-    k = int(np.argmax(lls))
-    return _refine(ctx, spec, nf0.theta, base, grid, k)
+    fit0 = fit_terms(ctx, base, spec=spec)
+    wm = whitened_model(ctx, fit0, n_sims=0, seed=0)[0]
+    st = local_stats(ctx, wm, list(grid))
+    b = int(np.argmax(st))
+    s = Screened(Candidate(effect, "linear", grid, (), None), grid[b], None, float(st[b]),
+                 grid[b].n_cols, 0.0, 1.0, 0.0)
+    term, _ = refine(ctx, wm, s)
+    alt = fit_terms(ctx, list(base) + [term], spec=spec, theta0=fit0.noise.theta)
+    return polish(ctx, fit0, alt)
+
+
+def _described(fit) -> dict | None:
+    if fit is None:
+        return None
+    tm = fit.terms[-1]
+    return {"kind": tm.kind, **{k: v for k, v in tm.params.items()
+                                if isinstance(v, (int, float, str))}}
 
 
 def oracle_row(row: dict) -> dict:
@@ -146,31 +89,28 @@ def oracle_row(row: dict) -> dict:
     rec, true_det, effect_col = blr.build(case)
     ctx = make_context(rec, target_blocks=2500)
     base = base_terms(ctx, "bias-t")
-    spec, flag = ctx.spec, ctx.outlier
     gm = ctx.spec._replace(n_markov=len(row["noise_model"]))
 
     def err(det):
-        return blr._err(rec.time, det, true_det, flag)
+        return blr._err(rec.time, det, true_det, ctx.outlier)
 
     out = dict(case, right=row["right"], err_loop=row["err_loop"], err_plain=row["err_plain"],
                err_oracle=row["err_oracle"], n_markov=gm.n_markov)
-    out["err_known"] = err(_fit(ctx, spec, base, col=effect_col)[0])
-    out["err_known_gm"] = err(_fit(ctx, gm, base, col=effect_col)[0]) \
+    out["err_known"] = err(blr.oracle(ctx, base, effect_col)[0])
+    out["err_known_gm"] = err(blr.oracle(ctx, base, effect_col, gm)[0]) \
         if gm.n_markov else out["err_known"]
     if row["right"] is None:  # clean: every oracle is the base model
-        out["err_free"], out["err_free_gm"], out["free_term"] = out["err_known"], \
-            out["err_known_gm"], None
+        out.update(err_free=out["err_known"], err_free_gm=out["err_known_gm"],
+                   free_term=None, free_term_gm=None)
         return out
-    tm = free_term(ctx, spec, base, row["right"])
-    out["free_term"] = None if tm is None else {"kind": tm.kind, **{
-        k: v for k, v in tm.params.items() if isinstance(v, (int, float, str))}}
-    terms = list(base) + ([tm] if tm is not None else [])
-    out["err_free"] = err(_fit(ctx, spec, terms)[0])
-    tm_gm = free_term(ctx, gm, base, row["right"]) if gm.n_markov else tm
-    out["free_term_gm"] = None if tm_gm is None else {"kind": tm_gm.kind, **{
-        k: v for k, v in tm_gm.params.items() if isinstance(v, (int, float, str))}}
-    terms_gm = list(base) + ([tm_gm] if tm_gm is not None else [])
-    out["err_free_gm"] = err(_fit(ctx, gm, terms_gm)[0]) if gm.n_markov else out["err_free"]
+    for key, spec in (("", ctx.spec), ("_gm", gm)):
+        if key and not gm.n_markov:
+            out["err_free_gm"], out["free_term_gm"] = out["err_free"], out["free_term"]
+            continue
+        fit = free_fit(ctx, spec, base, row["right"])
+        out["free_term" + key] = _described(fit)
+        det = ctx.rate - fit.residual if fit is not None else blr.oracle(ctx, base, None, spec)[0]
+        out["err_free" + key] = err(det)
     return out
 
 
