@@ -24,7 +24,8 @@ Decision (level ``level``, 0.05 by default): if exactly one hypothesis is reject
 other wins; if neither is, the two are *indistinguishable* -- the simpler one is kept
 (fewer searched parameters: a measured channel before a searched time constant; equal
 complexity keeps the better-ranked) and the other is reported as an alternative; if both
-are rejected, neither alone accounts for the residual and the higher likelihood is kept.
+are rejected, neither alone accounts for the residual: the duel's winner is the higher
+likelihood, and the loop decides by held-out prediction instead (:mod:`fogbayes.loop.ranking`).
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ class Duel(NamedTuple):
     winner: str
     verdict: str          # "A better", "B better", "indistinguishable", "neither alone"
     n_sims: int
+    lpd: tuple[float, float] | None = None  # held-out lpd of (A, B), where it decided
 
 
 def n_searched(c: Candidate) -> int:

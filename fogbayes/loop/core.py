@@ -13,7 +13,9 @@
         re-scored under the refit's noise, :func:`fogbayes.diagnose.refine.polish`)
         and re-choose the noise components for the model with it; keep the term only if
         the model with it predicts held-out folds of the record at least as well
-        (:mod:`.holdout`, time-blocked cross-validation), otherwise drop that candidate
+        (:mod:`.holdout`, time-blocked cross-validation; each fold re-chooses a step's
+        time from its training blocks, :mod:`.holdout_search`), otherwise drop that
+        candidate
     scan the final residual for structure no candidate names (``unexplained``)
 
 See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
@@ -78,9 +80,12 @@ RULE = ("a candidate is supported if (1) its likelihood ratio 2(logL_with - logL
         "(level 0.05); the "
         "one not rejected wins; if neither is rejected they are indistinguishable, the one "
         "with fewer searched parameters is kept and the other listed in 'alternatives'; "
-        "if both are, the higher likelihood. The winner is kept only if the model with it "
+        "if both are, the one whose model predicts held-out folds better (below). The "
+        "winner is kept only if the model with it "
         "predicts held-out time-blocked folds (10, each scored by its exact predictive "
-        "density given the other blocks, coefficients refitted without it; folds that "
+        "density given the other blocks, coefficients refitted without it, a step's time "
+        "averaged over every block boundary with the weights the other blocks give each "
+        "time; folds that "
         "cannot identify its coefficients left out) at least as well as the model without "
         "it; otherwise it is set aside and the next step decides among the others. "
         "alpha = 0.01 by default. After the decision, "
@@ -303,7 +308,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         if markov:
             new, rows = choose_noise(ctx, new, alpha=alpha,
                                      after=f"+ {s.candidate.effect}")
-        h_new = holdout.score(ctx, new)
+        h_new = holdout.score(ctx, new, search=holdout.searched_columns(ctx, s.candidate, new))
         cmp = holdout.compare(h_new, h_cur)
         evid["holdout"] = holdout.to_json(cmp)
         if not cmp.kept:  # supported in-sample, worse out of it
@@ -317,7 +322,8 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         detail = _detail(new, term, rec)
         steps.append(Step(s.candidate.effect, s.candidate.covariates, term, detail, evid,
                           cur.rms, m1.rms, m1, new))
-        fit, cur, h_cur = new, m1, h_new
+        fit, cur = new, m1
+        h_cur = holdout.score(ctx, fit)  # the next term is judged with this one held fixed
     unexplained = scan_unexplained(ctx, fit, seed=seed, alpha=alpha)
     noise_adev = None
     if model == "allan":

@@ -6,7 +6,11 @@ residual (``temperature_gradient`` vs ``thermal_lag`` vs ``temperature_rate``, `
 vs ``step``): they are ranked against each other by the bootstrap-calibrated duel of
 :mod:`fogbayes.diagnose.compete`, which charges a searched parameter for the noise it can
 follow. The best-ranked supported candidate meets each other supported linear candidate
-in turn; the winner goes on. Candidates the data cannot tell from the chosen one are
+in turn; the winner goes on. Where the duel rejects both ("neither alone"), the in-sample
+likelihood would favour the more flexible candidate, so the two refitted models are
+ranked by held-out prediction instead, a step's time averaged over its grid as the
+training folds weigh it (:mod:`.holdout`); the duel's row then says so
+(``decided_by``). Candidates the data cannot tell from the chosen one are
 listed in the step's ``evidence["alternatives"]`` with the duel's numbers and the PSIS-LOO
 difference of the two refitted models.
 """
@@ -18,6 +22,7 @@ import math
 from ..diagnose import elpd as el
 from ..diagnose import evidence as ev
 from ..diagnose.compete import Duel, duel
+from . import holdout
 
 #: Family-wise screening level a linear candidate must also reach.
 SCREEN_GATE = 0.1
@@ -62,17 +67,32 @@ def rank_supported(ctx, fit, supported, opts, step: int, cache: dict | None = No
                   n_sims=opts.n_sims, seed=opts.seed + 104729 * (step + 1), cache=cache)
         if du is None:
             continue
+        if du.verdict == "neither alone":
+            du = by_holdout(ctx, champ[0], other[0], du)
         duels.append((champ, other, du))
         if du.winner == "B":
             champ = other
     return champ, duels
 
 
+def by_holdout(ctx, a, b, du: Duel) -> Duel:
+    """Neither candidate alone accounts for the residual: keep the one whose model predicts
+    held-out time blocks better, a step's time averaged over its grid as the training
+    blocks weigh it (:mod:`fogbayes.loop.holdout_search`). The in-sample likelihood would
+    favour the more flexible one: a step searched at every block boundary follows the noise."""
+    lpd = [holdout.score(ctx, t.fit,
+                         search=holdout.searched_columns(ctx, t.screened.candidate, t.fit)).lpd
+           for t in (a, b)]
+    return du._replace(winner="B" if lpd[1] > lpd[0] else "A", lpd=(lpd[0], lpd[1]))
+
+
 def duel_json(a, b, du: Duel) -> dict:
     return {"leader": a[0].screened.candidate.effect, "other": b[0].screened.candidate.effect,
             "d_2loglik_other_minus_leader": du.d_obs, "p_leader": du.p_a, "p_other": du.p_b,
             "verdict": du.verdict, "winner": (a if du.winner == "A" else b)[0].screened.candidate.effect,
-            "n_sims": du.n_sims}
+            "n_sims": du.n_sims,
+            **({} if du.lpd is None else {"decided_by": "held-out log predictive density",
+                                          "lpd_leader": du.lpd[0], "lpd_other": du.lpd[1]})}
 
 
 def alternatives(ctx, chosen, duels, opts, cache) -> list[dict]:
