@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.thermal.compensate import bias_compensator
+from fogbayes.thermal.compensate import _xla_programs, bias_compensator
 from fogbayes.thermal.compensate_loops import compensate_into
 from fogbayes.models.polynomial import design, make_basis
 
@@ -71,9 +71,12 @@ def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
     bias_compensator.cache_clear()
     try:
         xla = bias_compensator(basis).single
-        assert xla is not cpu and hasattr(xla, "lower")  # a jitted XLA function
+        program = _xla_programs(basis.terms)[0]
+        calls = program._cache_size()
+        assert xla is not cpu
         np.testing.assert_allclose(np.asarray(xla(coef, z, y)), cpu(coef, z, y), rtol=0,
                                    atol=1e-13)
+        assert program._cache_size() == max(calls, 1)  # it ran the term set's XLA program
         assert default_solver() == "gram"
         comp = build_compensator(p, sc, T_range=(-30, 60), W_range=(-80, 80))
         assert comp.loop is None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from jax import monitoring
 
 from fogbayes.thermal.compensate import bias_compensator, compensate_bias, compensate_chunks
 from fogbayes.export.coefficients import (
@@ -48,6 +49,23 @@ def test_batch_equals_loop_and_compiles_once():
     assert bias_compensator(basis).batch._cache_size() == 1
     for k in range(3):
         np.testing.assert_allclose(batch[k], ys[k] - np.asarray(evaluate(coefs[k], T[:, None], basis)),
+                                   rtol=1e-12, atol=1e-9)
+    # another calibration of the same terms (its own centre and scale): the same program
+    other = basis._replace(centre=(basis.centre[0] + 5.0,), scale=(1.5 * basis.scale[0],))
+    assert other.centre != basis.centre and other.scale != basis.scale
+    traced = []
+
+    def on_event(name, seconds, **kw):
+        traced.append(name)
+
+    monitoring.register_event_duration_secs_listener(on_event)
+    try:
+        again = compensate_bias(coefs, z, ys, other)
+    finally:
+        monitoring.unregister_event_duration_listener(on_event)
+    assert "/jax/core/compile/jaxpr_trace_duration" not in traced  # nothing traced again
+    for k in range(3):
+        np.testing.assert_allclose(again[k], ys[k] - np.asarray(evaluate(coefs[k], T[:, None], other)),
                                    rtol=1e-12, atol=1e-9)
 
 

@@ -58,6 +58,7 @@ from .model import TERMS, AllanParams, adev
 from .data import AllanFitData, cube_root_normal, model_moments
 from .fit import AllanFit, _estimates, _mask, fit_wls
 from ..inference.convergence import converged as rule
+from ..support.programs import program
 
 #: bulk-ESS floor of the convergence rule: 200 in all (the K-R ridge mixes slowly)
 ESS_FLOOR = 200.0
@@ -198,6 +199,16 @@ def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 1
     return post
 
 
+@program
+def _pointwise_loglik(logp, delta, mask, data: AllanFitData, obs):
+    """log p(obs_k | draw) of every draw and lag: logp (C, D, 5), delta (C, D) -> (C, D, K).
+    The data are arguments (one compiled program per shape, not per record)."""
+    def one(lp, d):
+        return log_likelihood(lp, d, mask, data, obs)[1]
+
+    return jax.vmap(jax.vmap(one))(logp, delta)
+
+
 def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discrepancy,
          prior=None):
     from numpyro.diagnostics import summary
@@ -218,8 +229,8 @@ def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discr
     samples = {"logp": zs["logp"]}
     logp = np.asarray(zs["logp"])  # (chains, draws, 5)
     delta = np.exp(np.asarray(zs["log_delta"])) if discrepancy else np.zeros(logp.shape[:2])
-    ll_fn = jax.jit(jax.vmap(jax.vmap(lambda lp, d: log_likelihood(lp, d, jmask, data, obs)[1])))
-    log_lik = np.asarray(ll_fn(jnp.asarray(logp), jnp.asarray(delta)))
+    log_lik = np.asarray(_pointwise_loglik(jnp.asarray(logp), jnp.asarray(delta), jmask,
+                                           data, obs))
     diag = summary(samples, group_by_chain=True)["logp"]
     on = mask > 0
     draws = np.exp(logp.reshape(-1, 5)) * mask

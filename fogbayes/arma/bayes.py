@@ -36,6 +36,7 @@ from .model import arma_loglik, pacf_to_ar
 from ..models.buckets import held
 from ..models.statespace import arma_state_space, kalman_filter
 from ..inference.convergence import converged, ess_floor
+from ..support.programs import program
 
 
 class ArmaPosterior(NamedTuple):
@@ -85,7 +86,7 @@ def _one_step_terms(a, b, s2, x, n_valid):
 
 # module level, x an argument (not a closure): compiled once per shape, and a closed-over
 # series would become an XLA constant, folded at every compilation
-_pointwise = jax.jit(jax.vmap(_one_step_terms, in_axes=(0, 0, 0, None, None)))
+_pointwise = program(jax.vmap(_one_step_terms, in_axes=(0, 0, 0, None, None)))
 
 
 def pointwise_loglik(phi, theta, sigma2, x) -> jax.Array:
@@ -135,7 +136,7 @@ def _sampler(num_warmup: int, num_samples: int):
                                jit=False)
         return sample(keys, info.param_info, *args)
 
-    return on_host(jax.jit(run))
+    return on_host(program(run))
 
 
 def _run(x, p, q, P, Q, seed: int, num_warmup: int, num_samples: int,

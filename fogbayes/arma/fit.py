@@ -32,6 +32,7 @@ import jax.numpy as jnp
 
 from ..inference.lsq import minimize
 from ..models.buckets import bucket_length, held, padded
+from ..support.programs import program
 from .model import arma_profile_loglik, params_to_unconstrained, unconstrained_to_params
 
 Array = jax.Array
@@ -106,7 +107,7 @@ def long_ar_start(x: Array, *, p: int, q: int, ar_order: int | None = None,
                           mask_theta=mask_theta, max_order=max(m, default_ar_order(N, p, q)))
 
 
-@partial(jax.jit, static_argnames=("p", "q", "max_order"))
+@partial(program, static_argnames=("p", "q", "max_order"))
 def _long_ar_start(x: Array, n, m, *, p: int, q: int, mask_phi=None, mask_theta=None,
                    max_order: int | None = None) -> ArmaStart:
     """:func:`long_ar_start` of x[:n] inside the padded x (n and the long-AR order m traced,
@@ -156,7 +157,7 @@ def fit_arma(x: Array, *, p: int, q: int, max_iter: int = 200, tol: float = 1e-7
                      tol, p=p, q=q, init=init, mask_phi=mask_phi, mask_theta=mask_theta)
 
 
-@partial(jax.jit, static_argnames=("p", "q"))
+@partial(program, static_argnames=("p", "q"))
 def _fit_arma(x: Array, n, m, max_iter, tol, *, p: int, q: int, init=None, mask_phi=None,
               mask_theta=None) -> ArmaFit:
     return fit_padded(x, n, m, p=p, q=q, max_iter=max_iter, tol=tol, init=init,
@@ -243,6 +244,6 @@ def fit_arma_batch(X: Array, *, p: int, q: int, max_iter: int = 200, tol: float 
     return _fit_arma_batch(X, default_ar_order(X.shape[-1], p, q), max_iter, tol, p=p, q=q)
 
 
-@partial(jax.jit, static_argnames=("p", "q"))
+@partial(program, static_argnames=("p", "q"))
 def _fit_arma_batch(X: Array, m, max_iter, tol, *, p: int, q: int) -> ArmaFit:
     return jax.vmap(lambda x: fit_padded(x, None, m, p=p, q=q, max_iter=max_iter, tol=tol))(X)

@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..models.buckets import held
+from ..support.programs import program
 from .fit import ArmaFit, default_ar_order, fit_padded
 
 Array = jax.Array
@@ -84,7 +85,7 @@ def _masks(orders, P: int, Q: int) -> tuple[Array, Array]:
     return jnp.asarray(mp), jnp.asarray(mq)
 
 
-@partial(jax.jit, static_argnames=("P", "Q", "batched"))
+@partial(program, static_argnames=("P", "Q", "batched"))
 def _fit_one_order(x: Array, n, m, mp: Array, mq: Array, max_iter, *, P: int, Q: int,
                    batched: bool) -> ArmaFit:
     def fit(s):

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..inference.lsq import lstsq, lstsq_gram
 from ..models.polynomial import PolyBasis, design
+from ..support.programs import program
 
 SOLVERS = {"gram": lstsq_gram, "qr": lstsq}
 
@@ -52,12 +53,12 @@ def _bias_one(coef, z, centre, scale, *, unit: PolyBasis):
 @lru_cache(maxsize=32)
 def batched_solver(unit: PolyBasis, solver: str = "gram"):
     """``jit(vmap(solve))`` over sensors for one model structure (compiled once per shape)."""
-    return jax.jit(jax.vmap(partial(solve_one, unit=unit, solver=solver)))
+    return program(jax.vmap(partial(solve_one, unit=unit, solver=solver)))
 
 
 @lru_cache(maxsize=32)
 def batched_bias(unit: PolyBasis):
-    return jax.jit(jax.vmap(partial(_bias_one, unit=unit)))
+    return program(jax.vmap(partial(_bias_one, unit=unit)))
 
 
 def fit(z, y, w, centre, scale, n_valid, basis: PolyBasis, solver: str) -> tuple:

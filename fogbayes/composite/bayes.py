@@ -42,6 +42,7 @@ from .model import Orders, Scaling, raw_map, raw_offset, unpack
 from .fit import _xy, default_scaling, parse_noise
 from .noise import cell_stats
 from ..inference.convergence import converged, ess_floor
+from ..support.programs import program
 
 
 class BayesFit(NamedTuple):
@@ -161,7 +162,7 @@ def _conditional(G, h, s2, prior_scale):
     return cf, m
 
 
-@partial(jax.jit, static_argnames=("noise", "prior_scale"))
+@partial(program, static_argnames=("noise", "prior_scale"))
 def marginal_loglik(noise: str, eta: dict, data: dict, *, prior_scale: float):
     """log p(y | s, eta) with theta integrated out (module doc); jit/grad-able.
 
@@ -296,7 +297,7 @@ def _unconstrained(init: dict, chains: int) -> dict:
     return out
 
 
-@partial(jax.jit, static_argnames=("noise", "prior_scale", "K"))
+@partial(program, static_argnames=("noise", "prior_scale", "K"))
 def _draw_theta(flat: dict, keys, d: dict, *, noise: str, prior_scale: float, K: int):
     """theta | (s, eta), y drawn exactly for every posterior draw, and its per-cell
     log-likelihood. The data go in as an argument, not a closure: closed-over arrays become

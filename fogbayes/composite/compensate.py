@@ -32,6 +32,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import FogbayesError
+from ..support.programs import program
 from .model import (RESID_ABS, RESID_REL, FullParams, ProductParams, Scaling, _horner,
                     product_to_full)
 
@@ -159,7 +160,7 @@ def _rate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str, iterations: 
     return _solve(S, y, w, lo, hi, sc.W_scale, method=method, iterations=iterations)
 
 
-@partial(jax.jit, static_argnames=("method", "iterations"))
+@partial(program, static_argnames=("method", "iterations"))
 def _solve_from_linear(S, y, lo, hi, *, method: str, iterations: int):
     return _solve(list(S), y, y / S[0], lo, hi, 1.0, method=method, iterations=iterations)
 
@@ -187,7 +188,7 @@ def _result(p, sc, box, U, T, t, *, method, iterations, recip=None):
     return CompensationResult(rate, jnp.isfinite(rate))
 
 
-@partial(jax.jit, static_argnames=("method", "iterations"))
+@partial(program, static_argnames=("method", "iterations"))
 def compensate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",
                iterations: int = 2) -> CompensationResult:
     """Compensated input rate W (deg/s) for outputs U at temperatures T and times t.
@@ -205,7 +206,7 @@ def compensate(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halle
     return _result(p, sc, box, U, T, t, method=method, iterations=iterations)
 
 
-@partial(jax.jit, static_argnames=("method", "iterations"))
+@partial(program, static_argnames=("method", "iterations"))
 def compensate_sensors(p: FullParams, sc: Scaling, box, U, T, t, *, method: str = "halley",
                        iterations: int = 2) -> CompensationResult:
     """Many sensors at once: every argument has a leading sensor axis (k, ...).
@@ -217,7 +218,7 @@ def compensate_sensors(p: FullParams, sc: Scaling, box, U, T, t, *, method: str 
     return jax.vmap(f)(p, sc, box, U, T, t)
 
 
-@partial(jax.jit, static_argnames=("method", "iterations"))
+@partial(program, static_argnames=("method", "iterations"))
 def _draw_rates(p_draws: FullParams, sc: Scaling, box, U, T, t, eps, *, method: str,
                 iterations: int):
     """W_s = U^-1(U - eps_s; theta_s) for every draw s (leading axis of p_draws, eps)."""
@@ -384,8 +385,8 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
     sc_f = Scaling(*(float(v) for v in sc))
     recip = reciprocal_poly(consts, T_range, sc_f)
     kw = dict(method=method, iterations=k, recip=recip)
-    fn = jax.jit(lambda U, T, t: _result(consts, sc_f, box, U, T, t, **kw))
-    stream_fn = jax.jit(lambda U, T, t: _rate(consts, sc_f, box, U, T, t, **kw),
+    fn = program(lambda U, T, t: _result(consts, sc_f, box, U, T, t, **kw))
+    stream_fn = program(lambda U, T, t: _rate(consts, sc_f, box, U, T, t, **kw),
                         donate_argnums=0)
     loop = None
     if host or (host is None and jax.default_backend() == "cpu"):  # one pass at memory speed

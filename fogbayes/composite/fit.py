@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import FogbayesError, TooShortError
 from ..inference.lsq import lbfgs_scan
+from ..support.programs import program
 from .cells import RateData
 from .model import (FullParams, Orders, ProductParams, Scaling, design_matrix,
                     full_to_product, n_params, pack, product_to_full, unpack)
@@ -186,7 +187,7 @@ def _vector_to_theta(v, orders: Orders, form: str):
     return pack(product_to_full(_product_from_vector(v, orders)))
 
 
-@partial(jax.jit, static_argnames=("orders", "form", "steps"))
+@partial(program, static_argnames=("orders", "form", "steps"))
 def _lbfgs(v0, X, y, *, orders: Orders, form: str, steps: int):
     """L-BFGS on 0.5 mean((y - X theta(v))^2), ``steps`` iterations in one lax.scan."""
     def loss(v):

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..inference.noise_ssm import NoiseSpec, system, unpack, whiten_raw
+from ..support.programs import program
 
 #: Hyperparameter vectors filtered together (bounds memory: batch x n x columns floats).
 BATCH = 16
@@ -68,7 +69,7 @@ def _profile_columns(V, F, mask, p: int, pad):
     return -0.5 * (nobs * jnp.log(2 * jnp.pi * rss / nobs) + jnp.sum(mask * jnp.log(F)) + nobs)
 
 
-@partial(jax.jit, static_argnums=0)
+@partial(program, static_argnums=0)
 def column_logliks(spec: NoiseSpec, thetas, y_cols, X, mask, w, pad):
     """(G, C) profile log-likelihoods of C response columns under G hyperparameter vectors.
 

@@ -28,9 +28,10 @@ import numpy as np
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 from ..inference.lockstep import failed_as_large, minimize_one_by_one
+from ..support.programs import program
 
 
-@partial(jax.jit, static_argnums=0)
+@partial(program, static_argnums=0)
 def _negreml_and_grad(spec: ns.NoiseSpec, theta, y, X, mask, w, pad):
     def f(th):
         Y = jnp.concatenate([y[:, None], X], axis=1)

@@ -44,6 +44,7 @@ from ..errors import FogbayesError
 from ..models.arma import arma_loglik, pacf_to_ar
 from ..models.buckets import bucket_length
 from ..models.statespace import arma_state_space, kalman_filter
+from ..support.programs import program
 
 
 class Convergence(NamedTuple):
@@ -133,7 +134,7 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
         k_run, z0 = jax.vmap(start)(keys)
         return sample(k_run, z0, X, y, n_valid)
 
-    return on_host(jax.jit(run))
+    return on_host(program(run))
 
 
 def _held(X: np.ndarray, y: np.ndarray, bucket: bool):
@@ -230,7 +231,7 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
 
 
 #: over draws (outer) and sensors (inner); compiled once per shape
-_pointwise_draws = jax.jit(jax.vmap(jax.vmap(_pointwise, in_axes=(0, 0, 0, 0, 0, 0, None)),
+_pointwise_draws = program(jax.vmap(jax.vmap(_pointwise, in_axes=(0, 0, 0, 0, 0, 0, None)),
                                     in_axes=(0, 0, 0, 0, None, None, None)))
 
 

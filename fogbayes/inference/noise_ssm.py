@@ -39,6 +39,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from ..support.programs import program
+
 Array = jax.Array
 
 BANK_PER_DECADE = 2.0
@@ -245,18 +247,18 @@ def _negll(spec, theta, y, X, mask, w, pad):
     return -_profile(V, F, mask, pad)[0]
 
 
-@partial(jax.jit, static_argnums=0)
+@partial(program, static_argnums=0)
 def _negll_and_grad(spec, theta, y, X, mask, w, pad):
     return jax.value_and_grad(lambda th: _negll(spec, th, y, X, mask, w, pad))(theta)
 
 
-@partial(jax.jit, static_argnums=0)
+@partial(program, static_argnums=0)
 def _negll_starts(spec, thetas, y, X, mask, w, pad):
     """negll at every row of ``thetas`` (one vmapped pass: the start grid costs one call)."""
     return jax.vmap(lambda th: _negll(spec, th, y, X, mask, w, pad))(thetas)
 
 
-@partial(jax.jit, static_argnums=0)
+@partial(program, static_argnums=0)
 def _negll_and_grad_batch(spec, thetas, ys, Xs, pads, mask, w):
     """negll and gradient of many fits on one block grid: row i is ``thetas[i]`` on
     ``(ys[i], Xs[i], pads[i])``, one vmapped filter pass for all
@@ -287,7 +289,7 @@ def pad_columns(X: np.ndarray, multiple: int = 8, *,
     return Xp, pad
 
 
-@partial(jax.jit, static_argnums=0)
+@partial(program, static_argnums=0)
 def whiten_raw(spec: NoiseSpec, theta, Y, mask, w):
     """Raw innovations (n, C) and relative variances F (n,) of the columns of Y."""
     phi, q, p0 = system(spec, unpack(spec, theta))

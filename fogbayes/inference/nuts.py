@@ -13,6 +13,7 @@ from __future__ import annotations
 import jax
 
 from ..support.lazy import host_device
+from ..support.programs import program
 
 
 def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
@@ -61,7 +62,7 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
             return jax.lax.map(lambda kz: chain(kz[0], kz[1], *args), (keys, z0))
         return jax.vmap(chain, in_axes=(0, 0) + (None,) * len(args))(keys, z0, *args)
 
-    return on_host(jax.jit(run)) if jit else run
+    return on_host(program(run)) if jit else run
 
 
 def on_host(compiled):

@@ -26,6 +26,8 @@ import jax
 import jax.numpy as jnp
 from jax import lax
 
+from ..support.programs import program
+
 Array = jax.Array
 
 
@@ -101,7 +103,7 @@ def stationary_cov(T: Array, Q: Array) -> Array:
     return 0.5 * (P + P.T)
 
 
-@partial(jax.jit, static_argnames=("unroll",))
+@partial(program, static_argnames=("unroll",))
 def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, n_valid=None,
                   unroll: int = 8) -> FilterResult:
     """Kalman filter for y_t = alpha_t[0] + e_t, e_t ~ N(0, obs_var), started stationary.
@@ -148,7 +150,7 @@ def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, n_valid=None,
     return FilterResult(a, P, af, Pf, v, F, jnp.sum(ll))
 
 
-@partial(jax.jit, static_argnames=("unroll",))
+@partial(program, static_argnames=("unroll",))
 def rts_smoother(ss: ArmaStateSpace, filt: FilterResult, *, unroll: int = 8) -> SmootherResult:
     """Rauch-Tung-Striebel smoother, backwards from alpha_n | y_1..y_n.
 

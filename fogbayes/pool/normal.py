@@ -85,6 +85,8 @@ import jax.numpy as jnp
 import numpy as np
 from scipy import stats
 
+from ..support.programs import program
+
 MU_PRIOR_SD = 10.0
 SPREAD_PRIOR_SD = 1.0
 #: convergence rule shared with the single-record posteriors (allan/bayes.py)
@@ -222,10 +224,13 @@ def _run(y, cov, cens, w, centre, mu_sd, z0, key, num_warmup, num_samples, num_c
 
 def _log_lik_table(y, cov, cens, mu, spread) -> np.ndarray:
     """log p(y_u | mu_d, s_d) for every draw d and unit u: (D, U)."""
-    f = jax.vmap(jax.vmap(unit_log_lik, in_axes=(0, 0, 0, None, None)),
-                 in_axes=(None, None, None, 0, 0))
-    return np.asarray(jax.jit(f)(jnp.asarray(y), jnp.asarray(cov), jnp.asarray(cens),
-                                 jnp.asarray(mu), jnp.asarray(spread)))
+    return np.asarray(_unit_log_lik_draws(jnp.asarray(y), jnp.asarray(cov), jnp.asarray(cens),
+                                          jnp.asarray(mu), jnp.asarray(spread)))
+
+
+#: :func:`unit_log_lik` over units (inner) and draws (outer), compiled once per shape
+_unit_log_lik_draws = program(jax.vmap(jax.vmap(unit_log_lik, in_axes=(0, 0, 0, None, None)),
+                                       in_axes=(None, None, None, 0, 0)))
 
 
 def _predictive_p(yu, cu, cens, mu, spread, log_w=None, test: str = "joint") -> float:

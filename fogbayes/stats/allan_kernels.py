@@ -43,6 +43,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from ..support.programs import program
+
 from .allan_stencils import KINDS, STENCILS, static_counts  # noqa: F401 -- re-exported
 
 _CACHE_WORDS = 1 << 20  # float64 words read per chunk iteration (8 MB: about L2 + L3 share)
@@ -210,7 +212,7 @@ def _choose(kind: str, ms: tuple[int, ...], method: str) -> str:
     return "chunked" if overlap and jax.default_backend() == "cpu" else "direct"
 
 
-@partial(jax.jit, static_argnames=("ms", "kind", "gaps", "method"))
+@partial(program, static_argnames=("ms", "kind", "gaps", "method"))
 def allan_sums(y: jax.Array, ms: tuple[int, ...], kind: str = "oadev", gaps: bool = False,
                method: str = "auto") -> tuple[jax.Array, jax.Array]:
     """Sums of squared terms and term counts, one per cluster size in ``ms``.
@@ -235,7 +237,7 @@ def allan_sums(y: jax.Array, ms: tuple[int, ...], kind: str = "oadev", gaps: boo
     return {"direct": _direct, "chunked": _chunked, "mapped": _mapped}[how](S, G, ms, kind)
 
 
-@partial(jax.jit, static_argnames=("ms", "kind", "gaps", "method"))
+@partial(program, static_argnames=("ms", "kind", "gaps", "method"))
 def allan_variance(y: jax.Array, ms: tuple[int, ...], kind: str = "oadev", gaps: bool = False,
                    method: str = "auto") -> tuple[jax.Array, jax.Array]:
     """Variance of the named kind and the number of terms used, per cluster size.

@@ -6,10 +6,12 @@ the modelled bias from every sample::
 
     y_comp[i] = y[i] - X(z_i) @ coef          (y in the unit the coefficients were fitted in)
 
-:func:`bias_compensator` builds ``jit(f)`` and ``jit(vmap(f))`` (a batch of sensors of the
-same model structure) once per basis and caches them, so a fleet of sensors or a stream of
-chunks never compiles again; on a CPU the single-sensor ``f`` is a compiled loop
-(:mod:`fogbayes.thermal.compensate_loops`) that reads each input once and writes in place. The basis centres and scales the covariates before any power
+:func:`bias_compensator` uses ``jit(f)`` and ``jit(vmap(f))`` (a batch of sensors of the
+same model structure), compiled once per term set and shape with the coefficients and the
+basis's centre and scale as arguments, so a fleet of sensors, each with its own
+calibration, or a stream of chunks never compiles again; on a CPU the single-sensor ``f``
+is a compiled loop (:mod:`fogbayes.thermal.compensate_loops`) that reads each input once
+and writes in place. The basis centres and scales the covariates before any power
 is taken, so the compensators also run in float32 (``dtype=np.float32``): temperatures of
 order 1e2 deg C and rates of order 1e4 deg/h keep ~1e-7 relative precision, far below gyro
 noise. The composite (paper 000) compensator lives in :mod:`fogbayes.composite.compensate`.
@@ -26,6 +28,7 @@ import numpy as np
 from ..support.lazy import jax_on_cpu, lazy_module
 from .compensate_loops import compensate_into
 from ..models.polynomial import PolyBasis
+from ..support.programs import program
 
 jax = lazy_module("jax")  # the jitted compensator only: one-off calls take the NumPy path
 
@@ -41,19 +44,22 @@ class Compensator(NamedTuple):
 
 
 @lru_cache(maxsize=128)
-def bias_compensator(basis: PolyBasis) -> Compensator:
-    """The jitted compensators of ``basis`` (built once; cached on the hashable basis)."""
+def _xla_programs(terms: tuple[tuple[int, ...], ...]):
+    """XLA compensators of one term set, ``(single, batch)``: ``f(coef, z, y, centre,
+    scale)``. The basis's centre and scale are arguments, so every calibration with these
+    terms (every sensor of a fleet) shares one program per shape."""
 
-    def one(coef, z, y):
+    def one(coef, z, y, centre, scale):
         # The polynomial term by term, not ``design(z) @ coef``: XLA fuses this into one
         # loop over the samples instead of building the (n, p) design matrix and reducing
         # it (2.5-4x faster, benchmarks/RESULTS_stream.md). The terms are summed in order
         # and scaled by 1/scale, so results differ from ``design(z) @ coef`` by a rounding
         # or two of each term (~3e-15 deg/h where terms reach 10 deg/h).
         coef = coef.astype(y.dtype)
-        zs = [(z[:, c] - basis.centre[c]) * (1.0 / basis.scale[c]) for c in range(z.shape[1])]
+        centre, scale = centre.astype(y.dtype), scale.astype(y.dtype)
+        zs = [(z[:, c] - centre[c]) * (1.0 / scale[c]) for c in range(z.shape[1])]
         acc = None
-        for k, e in enumerate(basis.terms):  # static: unrolled into one fused loop
+        for k, e in enumerate(terms):  # static: unrolled into one fused loop
             term = coef[k]
             for c, ec in enumerate(e):
                 for _ in range(ec):
@@ -61,20 +67,26 @@ def bias_compensator(basis: PolyBasis) -> Compensator:
             acc = term if acc is None else acc + term
         return y - acc
 
+    return program(one), program(jax.vmap(one, in_axes=(0, 0, 0, None, None)))
+
+
+@lru_cache(maxsize=128)
+def bias_compensator(basis: PolyBasis) -> Compensator:
+    """The compensators of ``basis`` (built once; cached on the hashable basis)."""
+    centre = np.asarray(basis.centre, dtype=float)
+    scale = np.asarray(basis.scale, dtype=float)
     if jax_on_cpu():  # one pass at memory speed, no intermediate array, no compilation
         def single(coef, z, y, out=None, method="auto"):
             return compensate_into(basis, np.asarray(coef), np.asarray(z), np.asarray(y), out,
                                    method=method)
     else:
-        single = jax.jit(one)
-    compiled = []
+        def single(coef, z, y):
+            return _xla_programs(basis.terms)[0](coef, z, y, centre, scale)
 
-    def batch(coef, z, y):  # jit(vmap) built on the first batch call, then reused
-        if not compiled:
-            compiled.append(jax.jit(jax.vmap(one)))
-        return compiled[0](coef, z, y)
+    def batch(coef, z, y):  # the term set's jit(vmap), compiled on its first call
+        return _xla_programs(basis.terms)[1](coef, z, y, centre, scale)
 
-    batch._cache_size = lambda: compiled[0]._cache_size() if compiled else 0  # programs built
+    batch._cache_size = lambda: _xla_programs(basis.terms)[1]._cache_size()  # programs built
     return Compensator(single, batch)
 
 
