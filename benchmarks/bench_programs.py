@@ -8,6 +8,10 @@
    through ``program`` against its own ``jax.jit`` function (and a copy of U, for scale).
 3. What dropping fogbayes's programs gives back: maps held after an ARMA fit and after
    ``release_programs()``, against ``jax.clear_caches()``.
+4. The thermal XLA batch compensator (the fleet and GPU path) with the basis's centre and
+   scale as arguments (one program per term set, as fogbayes runs it) against the same
+   function with them baked in as constants (one program per calibration, as before
+   06d893c), and a copy of y for scale.
 """
 
 from __future__ import annotations
@@ -94,9 +98,46 @@ def maps_given_back() -> None:
           f"release_programs(), {everything} after jax.clear_caches() (same fit again)")
 
 
+def thermal_batch_arguments(k: int = 16, n: int = 1 << 18, repeat: int = 15) -> None:
+    from fogbayes.thermal.compensate import _xla_programs
+
+    terms = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))  # thermal (2, 2) in T, dT/dt
+    rng = np.random.default_rng(2)
+    z = jnp.asarray(np.stack([rng.uniform(-20, 60, (k, n)), rng.uniform(-1, 1, (k, n))], -1))
+    y = jnp.asarray(rng.standard_normal((k, n)))
+    coef = jnp.asarray(rng.standard_normal((k, len(terms))))
+    centre, scale = np.array([20.0, 0.0]), np.array([40.0, 0.5])
+    as_args = _xla_programs(terms)[1]
+
+    def one_baked(c, zz, yy):
+        zs = [(zz[:, j] - centre[j]) * (1.0 / scale[j]) for j in range(2)]
+        acc = None
+        for m, e in enumerate(terms):
+            term = c[m]
+            for j, ej in enumerate(e):
+                for _ in range(ej):
+                    term = term * zs[j]
+            acc = term if acc is None else acc + term
+        return yy - acc
+
+    baked = jax.jit(jax.vmap(one_baked))
+    cz, sz = jnp.asarray(centre), jnp.asarray(scale)
+    # the same sums; XLA may fold 1/scale differently: a rounding or two of each term
+    assert np.allclose(as_args(coef, z, y, cz, sz), baked(coef, z, y), rtol=0, atol=1e-11)
+    src = np.asarray(y)
+    dst = np.empty_like(src)
+    t_args = best_of(lambda: as_args(coef, z, y, cz, sz).block_until_ready(), repeat)
+    t_baked = best_of(lambda: baked(coef, z, y).block_until_ready(), repeat)
+    t_copy = best_of(lambda: np.copyto(dst, src), repeat)
+    print(f"thermal XLA batch {k} x {n}: centre/scale as arguments {t_args * 1e3:.2f} ms, "
+          f"baked in {t_baked * 1e3:.2f} ms (ratio {t_args / t_baked:.3f}); "
+          f"a copy of y {t_copy * 1e3:.2f} ms")
+
+
 if __name__ == "__main__":
     print(f"jax {jax.__version__}, vm.max_map_count {programs.max_map_count()}, "
           f"limit {programs.map_limit()} maps")
     call_overhead()
     compensate_sensors_call()
     maps_given_back()
+    thermal_batch_arguments()

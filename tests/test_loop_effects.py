@@ -17,6 +17,7 @@ the simulator's scenarios (fogbayes.loop.testbed wraps fogbayes.simulate.simulat
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 
@@ -46,6 +47,14 @@ CASES = [  # effect, model, record options, seed (scenario noise: N 0.005, B 0.0
 ]  # scale-factor and noise effects: tests/test_loop_table_and_noise.py
 
 
+@functools.lru_cache(maxsize=None)
+def _looped(effect, model, seed, magnitude):
+    """The loop on one short simulated record (run once per file: the step record serves
+    the first-effect test and the JSON contract test alike)."""
+    tr = make_record(effect, seed=seed, **dict(SHORT, magnitude=magnitude))
+    return tr, run_loop(tr.recording, model, seed=seed, **RUN)
+
+
 def _oracle_rms(res, effect, params, model):
     ctx = res.context
     fit = fit_terms(ctx, oracle_terms(ctx, base_terms(ctx, model), effect, params))
@@ -54,8 +63,8 @@ def _oracle_rms(res, effect, params, model):
 
 @pytest.mark.parametrize("effect, model, opts, seed", CASES, ids=[c[0] for c in CASES])
 def test_the_undeclared_effect_is_added_first(effect, model, opts, seed):
-    tr = make_record(effect, seed=seed, **opts)
-    res = run_loop(tr.recording, model, seed=seed, **RUN)
+    assert set(opts) == {*SHORT, "magnitude"} and all(opts[k] == v for k, v in SHORT.items())
+    tr, res = _looped(effect, model, seed, opts["magnitude"])
     assert res.effects[:1] == [effect]
     oracle = _oracle_rms(res, effect, tr.effect_params, model)
     assert res.final.rms <= 1.10 * oracle  # the study's criterion
@@ -71,8 +80,8 @@ def test_nothing_is_added_to_a_clean_record(seed):
 
 
 def test_json_contract_and_evidence_rule():
-    tr = make_record("step", seed=1, **dict(SHORT, magnitude=2.0))
-    doc = json.loads(json.dumps(run_loop(tr.recording, "bias-t", seed=1, **RUN).to_json()))
+    _, res = _looped("step", "bias-t", 1, 2.0)
+    doc = json.loads(json.dumps(res.to_json()))
     assert set(doc) >= {"model", "initial", "steps", "final", "unexplained"}
     assert set(doc["initial"]) == set(doc["final"]) == {"rms", "bias_stability", "elpd"}
     (step,) = doc["steps"]

@@ -50,6 +50,8 @@ def test_a_compilation_past_the_limit_drops_the_other_programs(monkeypatch):
     start = programs.memory_maps()
     limit = start + 60
     monkeypatch.setattr(programs, "map_limit", lambda: limit)
+    monkeypatch.setattr(programs, "REGROW_SHARE", 0.0)  # release at the limit itself
+    monkeypatch.setitem(programs._released, "warned", True)  # the warning: the next test
     made, peak = [], 0
     for k in range(16):
         prog = programs.program(lambda v, k=k: jnp.sin(v) * k + jnp.cumsum(v))
@@ -60,6 +62,23 @@ def test_a_compilation_past_the_limit_drops_the_other_programs(monkeypatch):
     assert made[-1]._cache_size() == 1  # the newest program was kept
     assert sum(p._cache_size() for p in made[:-1]) < len(made) - 1
     assert peak < limit + 120, (start, limit, peak)
+
+
+def test_maps_held_elsewhere_do_not_make_every_compilation_release(monkeypatch):
+    """Maps fogbayes cannot give back (here a count stuck past the limit) make one release
+    and one warning, not a release (and a recompilation of everything) per compilation:
+    the next release waits for REGROW_SHARE of the kernel's limit of new maps."""
+    monkeypatch.setattr(programs, "map_limit", lambda: 1_000)
+    monkeypatch.setattr(programs, "max_map_count", lambda: 65_530)
+    monkeypatch.setattr(programs, "memory_maps", lambda: 9_000)  # > 8 191 = REGROW of 0
+    monkeypatch.setitem(programs._released, "left", 0)
+    monkeypatch.setitem(programs._released, "warned", False)
+    before = programs.releases()
+    with pytest.warns(RuntimeWarning, match="vm.max_map_count"):
+        for k in range(5):
+            programs.program(lambda v, k=k: jnp.cos(v) + k)(jnp.arange(3.0 + k))
+    assert programs.releases() - before == 1
+    assert programs.release_threshold() == 9_000 + int(programs.REGROW_SHARE * 65_530)
 
 
 def test_program_is_the_jitted_function():

@@ -17,12 +17,20 @@ persistent program cache (:mod:`fogbayes._config`) or compiles. Programs of the 
 and JAX's, are left alone. The check costs a read of ``/proc/self/maps`` after a
 compilation only (milliseconds, against seconds of compiling); off Linux there is no count
 and nothing is dropped.
+
+Maps held outside fogbayes's programs (JAX's and NumPyro's small programs, the user's) are
+not given back by a release. So the next release waits until the count has grown by
+:data:`REGROW_SHARE` of the limit above what the last one left (never past
+:data:`CEILING_SHARE`): a process whose own maps alone sit past the limit does not drop and
+recompile fogbayes's programs after every compilation. Such a process is told once, by a
+``RuntimeWarning``, that it is nearing the kernel's limit and what frees it.
 """
 
 from __future__ import annotations
 
 import functools
 import gc
+import warnings
 import weakref
 
 from .lazy import lazy_module
@@ -31,11 +39,15 @@ jax = lazy_module("jax")  # imported by the first program built, not by this mod
 
 #: share of ``vm.max_map_count`` past which fogbayes drops its other compiled programs
 MAP_SHARE = 0.5
+#: growth (share of ``vm.max_map_count``) above the maps a release left before the next one
+REGROW_SHARE = 0.125
+#: share of ``vm.max_map_count`` past which a compilation always releases
+CEILING_SHARE = 0.85
 #: the Linux default of ``vm.max_map_count``, used where /proc/sys cannot be read
 DEFAULT_MAX_MAP_COUNT = 65_530
 
 _registry: weakref.WeakSet = weakref.WeakSet()
-_released = {"times": 0}
+_released = {"times": 0, "left": 0, "warned": False}
 
 
 def memory_maps() -> int:
@@ -62,6 +74,15 @@ def map_limit() -> int:
     return int(MAP_SHARE * max_map_count())
 
 
+def release_threshold() -> int:
+    """Maps past which the next compilation of a fogbayes program releases the others:
+    the limit, or the maps the last release left plus :data:`REGROW_SHARE` of the
+    kernel's limit where that is higher, and at most :data:`CEILING_SHARE` of it."""
+    top = max_map_count()
+    regrown = _released["left"] + int(REGROW_SHARE * top)
+    return min(max(map_limit(), regrown), int(CEILING_SHARE * top))
+
+
 def release_programs(keep: object = None) -> int:
     """Drop the compiled code of every fogbayes program but ``keep``; returns how many
     programs held compiled code."""
@@ -72,6 +93,15 @@ def release_programs(keep: object = None) -> int:
             dropped += 1
     gc.collect()  # executables are freed with their last reference
     _released["times"] += 1
+    _released["left"] = left = memory_maps()
+    if left > map_limit() and not _released["warned"]:
+        _released["warned"] = True
+        warnings.warn(
+            f"this process holds {left} memory maps after fogbayes dropped its own compiled "
+            f"programs, past half of the kernel's limit (vm.max_map_count = "
+            f"{max_map_count()}); at the limit the process dies. Most are other compiled "
+            "JAX programs: jax.clear_caches() frees them, or raise vm.max_map_count.",
+            RuntimeWarning, stacklevel=3)
     return dropped
 
 
@@ -95,7 +125,7 @@ class Program:
         jitted = self.jitted
         cached = jitted._cache_size()
         out = jitted(*args, **kwargs)
-        if jitted._cache_size() > cached and memory_maps() > map_limit():
+        if jitted._cache_size() > cached and memory_maps() > release_threshold():
             release_programs(keep=self)
         return out
 
