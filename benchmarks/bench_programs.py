@@ -10,8 +10,8 @@
    ``release_programs()``, against ``jax.clear_caches()``.
 4. The thermal XLA batch compensator (the fleet and GPU path) with the basis's centre and
    scale as arguments (one program per term set, as fogbayes runs it) against the same
-   function with them baked in as constants (one program per calibration, as before
-   06d893c), and a copy of y for scale.
+   function with them baked in as constants (the other design: one program per
+   calibration), and a copy of y for scale.
 """
 
 from __future__ import annotations
