@@ -191,7 +191,7 @@ def large(args) -> dict:
 def roofline(args) -> dict:
     import jax
 
-    from fogbayes.thermal.compensate import bias_compensator
+    from fogbayes.thermal.compensate import _xla_programs, bias_compensator
     from fogbayes.composite.compensate import build_compensator, compensate_numpy
     from fogbayes.composite.model import PAPER_000, Scaling, from_raw, raw_predict
     from fogbayes.thermal.model import ThermalSpec, bias_t_spec, thermal_basis
@@ -217,10 +217,16 @@ def roofline(args) -> dict:
         bpp = 8 * (2 + z.shape[1])
         row = {"bytes_per_sample": bpp, "copy_GB_s": copy_gbs(bpp * n)}
         # "library": the library's compensator (on a CPU the compiled loop, writing each
-        # chunk in place); "matrix" the former XLA form y - X(z) @ coef
+        # chunk in place); "xla": the term set's XLA program, the library's path where JAX
+        # sees a GPU, here on the CPU (the one implementation the loop would be replaced
+        # by); "matrix" the former XLA form y - X(z) @ coef
         matrix = jax.jit(lambda coef, z, y, basis=basis: y - design(z, basis) @ coef)
+        centre, scale = np.asarray(basis.centre), np.asarray(basis.scale)
+        xla = (lambda coef, z, y, f=_xla_programs(basis.terms)[0], centre=centre,
+               scale=scale: f(coef, z, y, centre, scale))
         in_place = jax.default_backend() == "cpu"
-        for name, f in (("library", bias_compensator(basis).single), ("matrix", matrix)):
+        for name, f in (("library", bias_compensator(basis).single), ("xla", xla),
+                        ("matrix", matrix)):
             def run(f=f, coef=coef, z=z, into=in_place and name == "library"):
                 for a in range(0, n, c):
                     if into:  # the loop, as the stream asks for it (chunks below
@@ -242,7 +248,7 @@ def roofline(args) -> dict:
                 acc += coef[k] * col
             np.subtract(y, acc, out=out)
         row["numpy_GB_s"] = bpp * n / best_of(numpy_run, max(1, rep // 2)) / 1e9
-        for k in ("library", "matrix", "numpy"):
+        for k in ("library", "xla", "matrix", "numpy"):
             row[k + "_vs_copy"] = row[k + "_GB_s"] / row["copy_GB_s"]
         res["cases"][label] = row
         print(label, json.dumps(row), flush=True)
@@ -263,11 +269,20 @@ def roofline(args) -> dict:
                                            tc[a:a + c])
     comp_run()
     row["library_GB_s"] = 32 * n / best_of(comp_run, rep) / 1e9
+    # the same compensator's XLA program (host=False: what a GPU machine runs), on the CPU
+    xla_comp = build_compensator(from_raw(PAPER_000, sc), sc, T_range=(-30, 60),
+                                 W_range=(-80, 80), host=False)
+
+    def xla_run():
+        for a in range(0, n, c):
+            out[a:a + c] = xla_comp.stream(jax.device_put(U[a:a + c]), Tc[a:a + c], tc[a:a + c])
+    xla_run()
+    row["xla_GB_s"] = 32 * n / best_of(xla_run, rep) / 1e9
     m = min(n, 2_000_000)
     p = from_raw(PAPER_000, sc)
     row["numpy_GB_s"] = 32 * m / best_of(lambda: compensate_numpy(
         p, sc, comp.box, U[:m], Tc[:m], tc[:m], iterations=comp.iterations), 1) / 1e9
-    for k in ("library", "numpy"):
+    for k in ("library", "xla", "numpy"):
         row[k + "_vs_copy"] = row[k + "_GB_s"] / row["copy_GB_s"]
     res["cases"]["composite halley"] = row
     print("composite halley", json.dumps(row), flush=True)
