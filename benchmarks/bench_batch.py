@@ -54,13 +54,17 @@ from fogbayes.thermal.data import (
 from fogbayes.thermal.workflow import fit_recording
 
 
-def best(fn, repeat=3):
+def best(fn, repeat=3, *, block=True):
+    """Best of ``repeat`` calls after a warm-up. ``block``: wait for JAX's asynchronous
+    results; off for functions that return host data only (walking a fleet's documents,
+    182 000 leaves for 1 000 sensors, took 0.13 s and was timed as fitting)."""
     fn()  # warm-up (compilation)
     times = []
     for _ in range(repeat):
         t = time.perf_counter()
         out = fn()
-        jax.block_until_ready(out)
+        if block:
+            jax.block_until_ready(out)
         times.append(time.perf_counter() - t)
     return min(times), out
 
@@ -149,7 +153,7 @@ def pipeline(recs, args) -> dict:
         docs = fit_vectorized(recs, model="thermal", solver=solver)
         t_first = time.perf_counter() - t
         t_vec, docs = best(lambda solver=solver: fit_vectorized(recs, model="thermal",
-                                                                 solver=solver))
+                                                                 solver=solver), block=False)
         diff = max(float(np.max(np.abs(np.subtract(a["params"]["coef"], b["params"]["coef"]))))
                    for a, b in zip(ref, docs))
         pipe[solver] = {"fit_vectorized_first_s": t_first, "fit_vectorized_s": t_vec,
