@@ -12,7 +12,7 @@ import numpy as np
 
 from ..data.documents import FIT_SCHEMA
 from ..export.coefficients import coefficient_document
-from ..inference.lsq import conditioning_from_covariance, identifiability
+from ..inference.lsq import conditionings_from_covariances, identifiability
 from ..models.polynomial import rebase_matrices
 
 _RANK_WARNING = ("the design is rank deficient: some covariate does not vary enough (e.g. "
@@ -35,12 +35,12 @@ def fit_documents(recs, model: str, spec, proc, bases, fits, lo, hi, n_blocks, n
     lo, hi, n_blocks = lo.tolist(), hi.tolist(), n_blocks.tolist()
     flagged = [0] * len(recs) if n_flagged is None else np.asarray(n_flagged).tolist()
     units = {"output": "deg/h", "T": "degC", "dT/dt": "degC/min"}
+    # the condition numbers from Cov = s^2 (X^T W X)^-1: a fleet fit keeps no design
+    conds = conditionings_from_covariances(fits.cov, fits.s2)
     out = []
     for s, rec in enumerate(recs):
         basis = bases[s]
-        # the condition number from Cov = s^2 (X^T W X)^-1: a fleet fit keeps no design
-        ident = identifiability(basis, lo[s], hi[s],
-                                conditioning_from_covariance(fits.cov[s], fits.s2[s]))
+        ident = identifiability(basis, lo[s], hi[s], conds[s])
         warnings = [] if ok[s] else [_RANK_WARNING]
         if not ident["identifiable"]:
             warnings.append(f"not identifiable: {ident['reason']}; the coefficients are "

@@ -191,17 +191,29 @@ def conditioning_from_covariance(cov, sigma2) -> Conditioning:
     deficient design, the null directions have eigenvalue 0 (singular value 0). Agrees with
     :func:`conditioning` to ~1e-12 relative for a well-conditioned design.
     """
+    return conditionings_from_covariances(np.asarray(cov, dtype=float)[None],
+                                          np.asarray([sigma2], dtype=float))[0]
+
+
+def conditionings_from_covariances(cov, sigma2) -> list[Conditioning]:
+    """:func:`conditioning_from_covariance` of each of ``S`` fits (``cov`` (S, p, p),
+    ``sigma2`` (S,)) in one stacked eigendecomposition (a fleet: one NumPy call, not S)."""
     cov = np.asarray(cov, dtype=float)
-    s2 = float(sigma2)
-    if not (np.isfinite(s2) and s2 > 0 and np.all(np.isfinite(cov))):
-        p = cov.shape[0]
-        return Conditioning(float("inf"), np.full(p, np.nan), np.eye(p))
-    lam, vec = np.linalg.eigh((cov + cov.T) / (2.0 * s2))  # ascending: largest s first
-    null = lam <= 1e-14 * lam[-1]
-    s = np.where(null, 0.0, 1.0 / np.sqrt(np.where(null, 1.0, lam)))
-    order = np.argsort(-s, kind="stable")
-    s, vt = s[order], vec.T[order]
-    return Conditioning(float(s[0] / s[-1]) if s[-1] > 0 else float("inf"), s, vt)
+    s2 = np.asarray(sigma2, dtype=float).reshape(-1)
+    n, p = cov.shape[0], cov.shape[-1]
+    good = np.isfinite(s2) & (s2 > 0) & np.all(np.isfinite(cov), axis=(1, 2))
+    out = [Conditioning(float("inf"), np.full(p, np.nan), np.eye(p)) for _ in range(n)]
+    if not good.any():
+        return out
+    c = cov[good]
+    lam, vec = np.linalg.eigh((c + c.transpose(0, 2, 1)) / (2.0 * s2[good, None, None]))
+    for i, lam_i, vec_i in zip(np.flatnonzero(good), lam, vec):  # ascending: largest s first
+        null = lam_i <= 1e-14 * lam_i[-1]
+        s = np.where(null, 0.0, 1.0 / np.sqrt(np.where(null, 1.0, lam_i)))
+        order = np.argsort(-s, kind="stable")
+        s, vt = s[order], vec_i.T[order]
+        out[i] = Conditioning(float(s[0] / s[-1]) if s[-1] > 0 else float("inf"), s, vt)
+    return out
 
 
 def identifiability(basis, lo, hi, cond: Conditioning, *,
