@@ -9,7 +9,8 @@
   filter, one pass over [X, Y] per hyperparameter vector) followed by one GLS per column::
 
       S_XX = sum_t m_t v^X_t v^X_t' / F_t,   S_Xy = sum_t m_t v^X_t v^y_t / F_t
-      RSS  = S_yy - S_yX S_XX^-1 S_Xy,      log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n]
+      RSS  = sum_t m_t r_t^2 / F_t,  r_t = v^y_t - v^X_t' B,
+      log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n]
 
   (the same profile as ``noise_ssm.gls``, per column). The start of a Gauss-Markov
   component (:func:`fogbayes.diagnose.markov.markov_start`) uses it too.
@@ -61,10 +62,10 @@ def _profile_columns(V, F, mask, p: int, pad):
     GX = VX * g[:, None]
     Sxx = GX.T @ VX + jnp.diag(pad)
     Sxy = GX.T @ VY
-    syy = jnp.sum(g[:, None] * VY * VY, axis=0)
     L = jnp.linalg.cholesky(Sxx)
     B = jax.scipy.linalg.cho_solve((L, True), Sxy)
-    rss = syy - jnp.sum(Sxy * B, axis=0)
+    R = VY - VX @ B  # RSS from the residuals (noise_ssm's module doc, "Precision")
+    rss = jnp.sum(g[:, None] * R * R, axis=0)
     nobs = mask.sum()
     return -0.5 * (nobs * jnp.log(2 * jnp.pi * rss / nobs) + jnp.sum(mask * jnp.log(F)) + nobs)
 

@@ -41,7 +41,8 @@ def _negreml_and_grad(spec: ns.NoiseSpec, theta, y, X, mask, w, pad):
         Sxx = S[1:, 1:] + jnp.diag(pad)
         L = jnp.linalg.cholesky(Sxx)
         beta = jax.scipy.linalg.cho_solve((L, True), S[1:, 0])
-        rss = S[0, 0] - S[1:, 0] @ beta
+        r = V[:, 0] - V[:, 1:] @ beta  # from the residual (noise_ssm's module doc, "Precision")
+        rss = jnp.sum(g * r * r)
         n = mask.sum() - (pad.size - pad.sum())
         logdet = 2.0 * jnp.sum(jnp.log(jnp.diag(L)))  # pad columns add log 1 = 0
         return 0.5 * (n * jnp.log(2 * jnp.pi * rss / n) + jnp.sum(mask * jnp.log(F))

@@ -20,8 +20,17 @@ L^-1 X for the Cholesky factor L of the noise covariance. Hence the GLS normal e
 and the exact profile likelihood (beta and s2 maximised) cost O(n d^2 + n d C)::
 
     S = sum_t m_t v_t v_t' / F_t,  v_t = innovations of [y, X],   beta = S_XX^-1 S_Xy
-    RSS = S_yy - S_yX beta,  s2 = RSS / n_obs
+    RSS = sum_t m_t r_t^2 / F_t,  r = v^y - v^X beta,  s2 = RSS / n_obs
     log L = -1/2 [ n_obs log(2 pi s2) + sum_t m_t log F_t + n_obs ]
+
+**Precision.** RSS is summed from the whitened residual, not taken as ``S_yy - S_yX beta``:
+that difference of two quadratic forms of the size of y loses ~eps |y|^2 / RSS of its
+relative precision where y is large beside the noise (a rate table's output, ~1e5 deg/h
+against ~0.1 deg/h of noise). On such a record the profile log-likelihood moved by up
+to 1.9 nats between log-flicker values 0.002 apart, L-BFGS-B stopped wherever that noise
+stalled its line search, and the loop's base fit differed by up to 31 % in RMS between
+two installs (benchmarks/RESULTS_loop.md); from the residual the error is ~eps |y| / |r|
+per block (``tests/test_noise_ssm_precision.py``).
 
 Noise hyperparameters (log relative variances, log time constants) are fitted by maximum
 likelihood with L-BFGS-B on the jitted gradient (:mod:`fogbayes.inference.noise_fit`). The whitened columns v_t / sqrt(F_t)
@@ -200,7 +209,8 @@ def _profile(V, F, mask, pad):
     Sxy = S[1:, 0]
     L = jnp.linalg.cholesky(Sxx)
     beta = jax.scipy.linalg.cho_solve((L, True), Sxy)
-    rss = S[0, 0] - Sxy @ beta
+    r = V[:, 0] - V[:, 1:] @ beta  # module doc, "Precision"
+    rss = jnp.sum((mask / F) * r * r)
     nobs = mask.sum()
     s2 = rss / nobs
     ll = -0.5 * (nobs * jnp.log(2 * jnp.pi * s2) + jnp.sum(mask * jnp.log(F)) + nobs)
@@ -235,7 +245,8 @@ def profile_np(V: np.ndarray, F: np.ndarray, mask: np.ndarray):
         inv = np.linalg.pinv(Sxx, hermitian=True)
         beta = inv @ Sxy
     nobs = float(mask.sum())
-    s2 = max(float(S[0, 0] - Sxy @ beta), 1e-300) / nobs
+    r = V[:, 0] - V[:, 1:] @ beta  # module doc, "Precision"
+    s2 = max(float(np.sum(g * r * r)), 1e-300) / nobs
     ll = -0.5 * (nobs * np.log(2 * np.pi * s2) + float(np.sum(mask * np.log(F))) + nobs)
     return float(ll), beta, s2 * inv, s2
 
