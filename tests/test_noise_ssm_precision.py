@@ -67,3 +67,31 @@ def test_likelihood_is_smooth_in_the_flicker_level(rate_table_like):
     # a smooth function on a 0.002 grid: second differences of the order of
     # f'' h^2 ~ 1e3 * 4e-6, far below the former form's jumps of ~1 nat
     assert second.max() < 0.05, second
+
+
+def test_held_out_scores_do_not_see_a_large_signal_in_the_model():
+    """The loop's held-out score of a fit equals that of the same fit with a 2e5 deg/h
+    signal in one of its columns added to the data and to the coefficient: the folds'
+    residuals are the same numbers, and so must their densities be (the scores subtract
+    the whole record's fit before forming their quadratic forms)."""
+    from fogbayes.diagnose.context import make_context
+    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop import holdout
+    from fogbayes.loop.bases import base_terms
+    from fogbayes.loop.testbed import make_record
+
+    tr = make_record(None, seed=4, duration=7200.0, fs=1.0)
+    ctx = make_context(tr.recording, target_blocks=600)
+    fit = fit_terms(ctx, base_terms(ctx, "bias-t"))
+    big = 2e5 * fit.X[:, 1]
+    ctx_big = ctx._replace(y=np.where(ctx.grid.mask > 0, ctx.y + big, ctx.y))
+    beta = np.array(fit.noise.beta, float)
+    beta[1] += 2e5
+    fit_big = fit._replace(noise=fit.noise._replace(beta=beta))
+    nb = ctx.y.size
+    steps = np.column_stack([(np.arange(nb) >= t).astype(float) for t in range(60, nb, 60)])
+    # search: a grid for the fit's last column (the former quadratic forms: 0.21 nats off)
+    for name, kw in (("gls", {}), ("ols", {"ols": True}), ("search", {"search": steps})):
+        a = holdout.score(ctx, fit, **kw)
+        b = holdout.score(ctx_big, fit_big, **kw)
+        np.testing.assert_allclose(b.per_fold, a.per_fold, atol=1e-4, err_msg=name)
