@@ -94,14 +94,18 @@ def score(ctx: Context, fit: ModelFit, k: int = N_FOLDS, *, ols: bool = False,
     spec, theta, s2 = fit.noise.spec, fit.noise.theta, float(fit.noise.sigma2)
     mask, w = np.asarray(ctx.grid.mask, float), ctx.grid.w
     p = fit.X.shape[1]
-    # y less the whole record's fit of the columns every fold's model holds (all of them;
+    # y less its least-squares fit on the columns every fold's model holds (all of them;
     # all but the searched last one with ``search``): the filter is linear in each column,
     # so every fold's residual is the same, and its quadratic forms are of the residual's
     # size instead of the signal's (noise_ssm's module doc, "Precision": a rate table's
-    # output is ~1e6 times its noise)
+    # output is ~1e6 times its noise). ``fit.beta`` may belong to other terms (the plain
+    # fit's check scores its own terms under the final fit's noise).
     keep = p - 1 if search is not None else p
-    y = ctx.y - fit.X[:, :keep] @ np.asarray(fit.beta, float)[:keep]
-    Y = np.column_stack([np.where(mask > 0, y, 0.0), fit.X])
+    obs = mask > 0
+    y = np.where(obs, ctx.y, 0.0)
+    if keep > 0:
+        y = y - fit.X[:, :keep] @ np.linalg.lstsq(fit.X[obs, :keep], y[obs], rcond=None)[0]
+    Y = np.column_stack([np.where(obs, y, 0.0), fit.X])
     if search is not None:  # [y, the rest of the model, the grid] after the fitted columns
         Y = np.column_stack([Y, Y[:, :p], search])
     V_all, F_all = ns.filter_padded(spec, theta, Y, mask, w)
