@@ -45,6 +45,8 @@ from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, base_terms
 from .calibration import calibration_json, input_json
+from .constant import ieee_constant
+from .separable import detectability, separability_warnings
 from .identifiable import collinearity_warnings
 from .compensate import compensate
 from .describe import describe
@@ -104,10 +106,12 @@ class Options(NamedTuple):
 
 
 def _metrics(ctx: Context, fit: ModelFit, seed: int, cache: dict) -> Metrics:
+    """Metrics of the model as a calibration: its residual with the IEEE 952 constant
+    (:mod:`.constant`), so the RMS keeps the mean the compensated output would have."""
     e = el.elpd(ctx, fit, seed=seed, cache=cache)
     t = ctx.cov.t
-    return Metrics(block_rms(t, fit.residual, ctx.outlier),
-                   stability(t, fit.residual, ctx.outlier), e.elpd_loo, e.se)
+    r = ieee_constant(ctx, fit).residual
+    return Metrics(block_rms(t, r, ctx.outlier), stability(t, r, ctx.outlier), e.elpd_loo, e.se)
 
 
 class Trial(NamedTuple):
@@ -325,14 +329,21 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         fit, cur = new, m1
         h_cur = holdout.score(ctx, fit)  # the next term is judged with this one held fixed
     unexplained = scan_unexplained(ctx, fit, seed=seed, alpha=alpha)
+    # what the final model could still be missing on this programme and noise
+    detectable = tuple(detectability(ctx, fit, alpha, effects=opts.effects)) \
+        if model != "allan" else ()
     noise_adev = None
     if model == "allan":
         story, noise_adev = _allan_story(rec, ctx, steps, fit)
         unexplained += story
+    # the calibration's constant is the run's time average (IEEE 952), not the GLS
+    # intercept (the random walk's starting level): :mod:`.constant`
+    fit, fit0 = ieee_constant(ctx, fit), ieee_constant(ctx, fit0)
     comp = compensate(rec, ctx, fit, model)
     held = {"folds": holdout.N_FOLDS, "lpd_base": h_base.lpd, "lpd_final": h_cur.lpd,
             "not_kept": held_out, **_plain_check(ctx, model, fit, h_cur)}
-    warnings = tuple(collinearity_warnings(ctx))
+    warnings = tuple(collinearity_warnings(ctx)) + tuple(
+        separability_warnings(list(detectable), cur.rms))
     if held.get("final_not_worse_than_plain_fit") is False:
         warnings += (f"the final model predicts held-out time blocks worse than "
                      f"{held['plain_fit']} (log predictive density {h_cur.lpd:.1f} vs "
@@ -340,7 +351,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
                      f"nats): compare with that fit before using it",)
     return LoopResult(model, m0, steps, cur, unexplained, fit, fit0, stop, ctx, comp, RULE,
                       noise_prior, input_json(rec), calibration_json(fit, ctx, model),
-                      warnings, tuple(noise_rows), noise_adev, held)
+                      warnings, tuple(noise_rows), noise_adev, held, detectable)
 
 
 #: nats of held-out log predictive density by which the final model may trail the plain

@@ -73,6 +73,7 @@ class LoopResult(NamedTuple):
     noise_selection: tuple = ()        # Gauss-Markov add/drop decisions (noise_model.choose)
     noise_adev: dict | None = None     # allan: ADEV misfit without/with the components
     holdout: dict | None = None        # time-blocked CV: base and final lpd, terms not kept
+    detectable: tuple = ()             # per candidate: the size that could go unseen
 
     @property
     def effects(self) -> list[str]:
@@ -97,6 +98,8 @@ class LoopResult(NamedTuple):
             doc["holdout"] = self.holdout
         if self.noise_prior is not None:  # an assumption every number above depends on
             doc["noise_prior"] = self.noise_prior.to_json(self.context.grid.dt)
+        if self.detectable:
+            doc["detectable"] = list(self.detectable)
         if self.warnings:
             doc["warnings"] = list(self.warnings)
         if self.calibration is not None:
