@@ -12,6 +12,11 @@ so the result does not depend on the sample rate):
 
     T_s[k+1] = a T_s[k] + (1 - c) u[k+1] + (c - a) u[k],   a = exp(-h/tau), c = tau (1 - a) / h
 
+The temperature rate of each channel is exact, not a finite difference: the sensor obeys
+the ODE at every instant, so at each sample ``dT_s/dt = (T_chamber - T_s) / tau`` (a channel
+with tau = 0 follows the programme's own slope). This is the physical driver of rate effects
+(the Shupe term); an estimator working on a recorded channel is judged against it.
+
 Two channels with different lags model paper 004's outer and inner coil sensors.
 """
 
@@ -60,6 +65,7 @@ class ThermalProfile(NamedTuple):
     temperatures: np.ndarray  # (n, k) sensor channels, deg C
     names: tuple[str, ...]  # channel names ("temperature", "temperature_2", ...)
     lags: tuple[float, ...]  # time constant of each channel, s
+    rates: np.ndarray | None = None  # (n, k) exact dT/dt of each channel, deg C/min
 
 
 class RateTableSchedule(NamedTuple):
@@ -146,6 +152,37 @@ def chamber_temperature(t: np.ndarray, segments: Sequence, *, start: float) -> n
     return np.interp(np.asarray(t, dtype=float), kt, kT)
 
 
+def chamber_rate(t: np.ndarray, segments: Sequence, *, start: float) -> np.ndarray:
+    """Slope (deg C/min) of the piecewise-linear programme at times ``t``.
+
+    0 before the start and after the end; at a knot (where the slope jumps) the mean of the
+    slopes on either side, the derivative of the programme's linear interpolation there.
+    """
+    kt, kT = segment_knots(segments, start=start)
+    span = np.diff(kt)
+    slope = np.divide(np.diff(kT), span, out=np.zeros(span.size), where=span > 0)
+    slope = np.concatenate([[0.0], slope, [0.0]])  # outside the programme: held, slope 0
+    t = np.asarray(t, dtype=float)
+    right = slope[np.searchsorted(kt, t, side="right")]
+    left = slope[np.searchsorted(kt, t, side="left")]
+    return 30.0 * (left + right)  # mean of the two sides, deg C/s -> deg C/min
+
+
+def sensor_rates(temps: np.ndarray, chamber: np.ndarray, lags: Sequence[float],
+                 chamber_slope: np.ndarray) -> np.ndarray:
+    """Exact dT/dt (deg C/min) of lagged channels at their samples, (n, k).
+
+    From the ODE itself, ``dT_s/dt = (T_chamber - T_s) / tau`` (deg C/s, times 60), which
+    holds at each sample of :func:`first_order_lag`'s solution; a channel with tau = 0 is
+    the chamber and takes ``chamber_slope`` (deg C/min, :func:`chamber_rate`).
+    """
+    temps = np.asarray(temps, dtype=float)
+    out = np.empty(temps.shape)
+    for j, tau in enumerate(lags):
+        out[:, j] = chamber_slope if tau == 0 else 60.0 * (chamber - temps[:, j]) / tau
+    return out
+
+
 def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
                     initial: float | None = None) -> np.ndarray:
     """Response of tau dy/dt = u - y, exact for u linear between samples
@@ -163,7 +200,8 @@ def thermal_profile(segments: Sequence, *, fs: float, start: float,
                     lags: Sequence[float] = (300.0, 900.0),
                     names: Sequence[str] | None = None,
                     duration: float | None = None) -> ThermalProfile:
-    """Chamber programme -> chamber temperature and one lagging sensor channel per lag.
+    """Chamber programme -> chamber temperature, one lagging sensor channel per lag, and
+    each channel's exact rate (:func:`sensor_rates`).
 
     ``duration`` defaults to the programme's length. Channel names default to the file
     contract: ``temperature``, ``temperature_2``, ...
@@ -179,7 +217,8 @@ def thermal_profile(segments: Sequence, *, fs: float, start: float,
     if len(names) != len(lags):
         raise SimulationParameterError(f"{len(names)} names for {len(lags)} lags",
                                        column="names", fix="give one name per lag")
-    return ThermalProfile(t, ch, temps, tuple(names), lags)
+    rates = sensor_rates(temps, ch, lags, chamber_rate(t, segments, start=start))
+    return ThermalProfile(t, ch, temps, tuple(names), lags, rates)
 
 
 def paper004_segments(*, room: float = 20.0, cold: float = -40.0, hot: float = 60.0,

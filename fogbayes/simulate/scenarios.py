@@ -57,10 +57,11 @@ def _sub(seed: int, name: str) -> int:
     return int(np.random.SeedSequence([seed, zlib.crc32(name.encode())]).generate_state(1)[0])
 
 
-def _rate_cov(t, temps, chamber=None, omega=None, op=None, soaked=False) -> Covariates:
-    T = temps[:, 0]
-    dTdt = np.zeros_like(t) if soaked or t.size < 2 else np.gradient(T, t) * 60.0
-    return Covariates(t, T, temps, dTdt, omega, chamber, op)
+def _rate_cov(t, temps, chamber=None, omega=None, op=None, *, rates=None) -> Covariates:
+    """True covariates; ``rates`` (n, k) the channels' exact dT/dt (deg C/min,
+    :func:`profiles.sensor_rates`), None on a soaked record (dT/dt = 0)."""
+    dTdt = np.zeros_like(t) if rates is None else np.asarray(rates[:, 0], dtype=float)
+    return Covariates(t, temps[:, 0], temps, dTdt, omega, chamber, op)
 
 
 def _input(omega, n) -> np.ndarray | None:
@@ -78,7 +79,8 @@ def _thermal(fs, duration, *, lags=(300.0, 900.0), input_rate=None, segments=Non
                                lags=lags, duration=duration)
         duration = p.time[-1] + 1.0 / (fs or 10.0)
         levels = {**levels, "segments": pf.segments_json(segments)}
-    cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size))
+    cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size),
+                    rates=p.rates)
     return _Base(cov, p.names, {}, {"temperature_order": {"coeffs": [0.5, 0.01, 2e-4],
                                                           "T_ref": 20.0}},
                  {"N": 0.005, "B": 0.02, "K": 0.02},
@@ -94,7 +96,8 @@ def _paper004(fs, duration, *, soak=7200.0, ramp_rate=0.5, lags=(300.0, 900.0),
     segs = pf.paper004_segments(soak=soak, ramp_rate=ramp_rate, **temps)
     p = pf.thermal_profile(segs, fs=fs or 1.0, start=segs[0].temperature, lags=lags,
                            duration=duration)
-    cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size))
+    cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size),
+                    rates=p.rates)
     return _Base(cov, p.names, {},
                  {"paper004": {"c": [0.3, 0.03, 6e-4], "d": [4.0, 0.0], "cross": 0.0,
                                "T_ref": 20.0}},
@@ -106,7 +109,7 @@ def _paper004(fs, duration, *, soak=7200.0, ramp_rate=0.5, lags=(300.0, 900.0),
 def _static(fs, duration, *, temperature=20.0) -> _Base:
     t = pf.time_grid(duration or 3600.0, fs or 10.0)
     temps = np.full((t.size, 1), float(temperature))
-    return _Base(_rate_cov(t, temps, soaked=True), ("temperature",), {}, {},
+    return _Base(_rate_cov(t, temps), ("temperature",), {}, {},
                  {"N": 0.005, "B": 0.02, "K": 0.05}, {"kind": "static", "temperature": temperature},
                  fs or 10.0)
 
@@ -117,7 +120,7 @@ def _grid(fs, duration, temperatures, rates, dwell, restart):
     s = pf.rate_table_schedule(fs=fs or 1.0, dwell=dwell, temperatures=temperatures,
                                rates=rates, restart=restart)
     cov = _rate_cov(s.time, s.temperature[:, None], s.temperature, s.input_rate,
-                    s.operating_time, soaked=True)
+                    s.operating_time)
     prof = {"kind": "rate_table", "dwell": dwell, "temperatures": list(s.temperatures),
             "rates": list(s.rates), "restart": restart}
     return cov, prof

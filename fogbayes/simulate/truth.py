@@ -13,7 +13,9 @@ class Covariates(NamedTuple):
     """The true (noise-free) drivers of the effects, one value per sample.
 
     time s; temperature (n,) first sensor channel deg C; temperatures (n, k) all channels;
-    dTdt deg C/min of the first channel (0 on a soaked rate table); input_rate deg/s or
+    dTdt deg C/min of the first channel, the exact derivative of its true temperature
+    (:func:`~fogbayes.simulate.profiles.sensor_rates`: tau dT/dt = T_chamber - T, no
+    finite difference, no smoothing; 0 on a soaked record); input_rate deg/s or
     None; chamber deg C or None; operating_time s (paper 000's t) or None.
     """
 
