@@ -32,6 +32,8 @@ def _root(quiet: bool = typer.Option(False, "--quiet", "-q",
 # Subcommands register themselves on import (order = order in --help).
 from . import allan, arma, batch, compensate, demo, export, fit, info, loop, plan, plan_chamber, pool, prior, report, simulate  # noqa: E402,F401
 
+_common.add_csv_options(app)  # --delimiter, --decimal: declared once, beside --time-unit
+
 
 class Terminated(SystemExit):
     """Raised by the SIGTERM handler: the command unwinds and exits with 128 + 15 = 143."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+import inspect
 import json
 import os
 import sys
@@ -34,10 +36,19 @@ COLUMN_OPT = typer.Option("output", "--column", help="Gyro output column.",
 TIME_COLUMN_OPT = typer.Option("time", "--time-column",
                                help="Time column (in --time-unit, default s).",
                                rich_help_panel=_INPUT)
-TIME_UNIT_OPT = typer.Option("s", "--time-unit",
-                             help="Unit of the time column: s, ms, us or ns (converted to s), "
-                                  "e.g. --time-column 'time (ms)' --time-unit ms.",
-                             rich_help_panel=_INPUT)
+TIME_UNIT_OPT = typer.Option(None, "--time-unit",
+                             help="Unit of the time column: s, ms, us or ns (converted to s). "
+                                  "Default: the unit its name states (time_ms, 'time [us]'), "
+                                  "else s.",
+                             rich_help_panel=_INPUT, show_default=False)
+DELIMITER_OPT = typer.Option(None, "--delimiter",
+                             help="CSV field separator: ',', ';' or tab. Default: sniffed from "
+                                  "the header and first rows.",
+                             rich_help_panel=_INPUT, show_default=False)
+DECIMAL_OPT = typer.Option(None, "--decimal",
+                           help="CSV decimal mark: '.' or ','. Default: sniffed (',' in a "
+                                "';'-separated file whose numbers read 0,63).",
+                           rich_help_panel=_INPUT, show_default=False)
 OUTPUT_UNIT_OPT = typer.Option(None, "--output-unit",
                                help="Output unit: deg/h, deg/s, rad/s, V, mV or Hz "
                                     "(default: the file's '# unit:' line, else deg/h).",
@@ -88,29 +99,108 @@ QUIET_OPT = typer.Option(False, "--quiet", "-q", callback=_quiet,
                          help="No progress bars or status lines on stderr; results only.")
 
 
+#: The running command's ``--delimiter`` and ``--decimal`` (set by :func:`add_csv_options`),
+#: and the hints :func:`load_recording` found about its recordings' time columns.
+_READING: dict[str, Any] = {"delimiter": None, "decimal": None, "hints": []}
+
+
+def csv_options() -> dict[str, str | None]:
+    """``delimiter=``/``decimal=`` of :func:`fogbayes.data.load`, as the command line gave them."""
+    return {"delimiter": _READING["delimiter"], "decimal": _READING["decimal"]}
+
+
+def add_csv_options(app: typer.Typer) -> None:
+    """Give every command that reads a recording -- one that declares ``--time-unit``
+    (:data:`TIME_UNIT_OPT`) -- the options ``--delimiter`` and ``--decimal``, placed after
+    it; :func:`load_recording` reads them. A :class:`FogbayesError` raised by such a command
+    after a time column looked like ms or us counted as seconds gets the ``--time-unit``
+    hint first in its fix (:func:`fogbayes.data.time_units.spacing_hint`): a window or a
+    rate that makes no sense in seconds mostly follows from the unit."""
+    for command in app.registered_commands:
+        fn = command.callback
+        sig = inspect.signature(fn, eval_str=True)
+        params = list(sig.parameters.values())
+        at = next((k for k, p in enumerate(params) if p.default is TIME_UNIT_OPT), None)
+        if at is None or "delimiter" in sig.parameters:
+            continue
+        kind = params[at].kind
+        params[at + 1:at + 1] = [inspect.Parameter("delimiter", kind, default=DELIMITER_OPT,
+                                                   annotation=str),
+                                 inspect.Parameter("decimal", kind, default=DECIMAL_OPT,
+                                                   annotation=str)]
+        command.callback = _reading_csv(fn, sig.replace(parameters=params))
+
+
+def _reading_csv(fn, signature: inspect.Signature):
+    @functools.wraps(fn)
+    def command(*args, delimiter=None, decimal=None, **kwargs):
+        _READING.update(delimiter=delimiter, decimal=decimal, hints=[])
+        try:
+            return fn(*args, **kwargs)
+        except FogbayesError as exc:
+            hints = _READING["hints"]
+            if hints and "--time-unit" not in str(exc):
+                exc.fix = f"{hints[0]}; otherwise {exc.fix}" if exc.fix else hints[0]
+                exc.args = (exc._compose(),)
+            raise
+        finally:
+            _READING.update(delimiter=None, decimal=None, hints=[])
+
+    command.__signature__ = signature
+    command.__annotations__ = {p.name: p.annotation for p in signature.parameters.values()
+                               if p.annotation is not inspect.Parameter.empty}
+    return command
+
+
 def load_recording(path: Path, *, column: str = "output", time_column: str = "time",
                    output_unit: str | None = None, scale_factor: float | None = None,
                    temperature: list[str] | None = None,
-                   input_rate: str = "input_rate", time_unit: str = "s",
+                   input_rate: str = "input_rate", time_unit: str | None = None,
                    temperature_scale: float = 1.0,
                    temperature_offset: float = 0.0, topic: str | None = None,
-                   instance: int | None = None, axis: str | None = None) -> Recording:
+                   instance: int | None = None, axis: str | None = None,
+                   tell: bool = True) -> Recording:
     """Load a Recording with the command line's column/unit overrides (and, for a gyro
-    log, its ``--topic``, ``--instance`` and ``--axis``)."""
+    log, its ``--topic``, ``--instance`` and ``--axis``; for CSV, ``--delimiter`` and
+    ``--decimal``). What :func:`time_notes` finds is said on stderr (``tell``) and kept as
+    the hint of the command's errors (:func:`add_csv_options`)."""
     from ..errors import ArgumentError
 
     try:
-        return load(path, time=time_column, output=column, unit=output_unit,
-                    scale_factor=scale_factor, temperature=temperature or None,
-                    input_rate=input_rate, time_unit=time_unit,
-                    temperature_scale=temperature_scale, temperature_offset=temperature_offset,
-                    topic=topic, instance=instance, axis=axis)
+        rec = load(path, time=time_column, output=column, unit=output_unit,
+                   scale_factor=scale_factor, temperature=temperature or None,
+                   input_rate=input_rate, time_unit=time_unit,
+                   temperature_scale=temperature_scale, temperature_offset=temperature_offset,
+                   topic=topic, instance=instance, axis=axis, **csv_options())
     except ArgumentError as exc:  # name the command-line flag, not fogbayes.load's keyword
         flag = "--" + (exc.column or "").lstrip("-").replace("_", "-")
         if exc.column not in ("temperature_scale", "temperature_offset", "scale_factor"):
             raise
         raise ArgumentError(exc.problem.replace(exc.column, flag), column=flag,
                             fix=(exc.fix or "").replace(exc.column, flag)) from None
+    read_as, hint = time_notes(rec, path, time_unit)
+    if hint:
+        _READING["hints"].append(hint)
+    if tell:
+        if read_as:
+            say(f"{path}: time column {read_as}")
+        if hint:
+            say(f"warning: {path}: {hint}")
+    return rec
+
+
+def time_notes(rec: Recording, path: Path, time_unit: str | None) -> tuple[str | None, str | None]:
+    """(how the time column was read when its name chose it, a ``--time-unit`` hint when a
+    time column read in seconds by default steps like a ms or us counter); None each when
+    there is nothing to say. Gyro logs carry their own time stamps: nothing."""
+    from ..data.io import TIME_READ_KEY
+    from ..data.logs import is_log
+    from ..data.time_units import spacing_hint
+
+    read_as = rec.meta.extra.get(TIME_READ_KEY)
+    if time_unit is not None or read_as or is_log(Path(path)):
+        return read_as, None
+    return None, spacing_hint(rec.time)
 
 
 def channels(axis: str | None, column: str) -> list[tuple[str | None, dict]]:

@@ -18,7 +18,7 @@ from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
                       TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, refuse_overwrite, say,
                       write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT, csv_options
 
 _EPILOG = """Examples:
 
@@ -86,10 +86,12 @@ def batch(
     load = {"time": time_column, "output": column, "unit": output_unit,
             "scale_factor": scale_factor, "temperature": temperature or None,
             "input_rate": input_rate, "time_unit": time_unit,
-            "temperature_scale": temperature_scale, "temperature_offset": temperature_offset}
+            "temperature_scale": temperature_scale, "temperature_offset": temperature_offset,
+            **csv_options()}
     from ..data.checks import finite, time_divisor
 
-    time_divisor(time_unit)  # bad reading options: exit 2 now, not one failure per file
+    if time_unit is not None:
+        time_divisor(time_unit)  # bad reading options: exit 2 now, not one failure per file
     finite(temperature_scale, "--temperature-scale", nonzero=True)
     finite(temperature_offset, "--temperature-offset")
     if scale_factor is not None:

@@ -10,14 +10,17 @@ import typer
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      refuse_overwrite, write_json)
+                      refuse_overwrite, time_notes, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
-def summary_document(rec, rec_path) -> dict:
-    """The ``--json`` document: size, sampling, gaps, unit, output and channel ranges."""
+def summary_document(rec, rec_path, time_unit: str | None = None) -> dict:
+    """The ``--json`` document: size, sampling, gaps, unit, output and channel ranges; how
+    the time column was read (``time_read``, when its name chose it) and ``hints`` (a time
+    column stepping like a ms or us counter read in seconds: :func:`time_notes`)."""
     s = rec.sampling()
+    read_as, hint = time_notes(rec, rec_path, time_unit)
     return {
         "file": str(rec_path), "sensor_id": rec.meta.sensor_id, "n": rec.n,
         "duration_s": s.duration, "sample_rate_hz": s.sample_rate, "irregular": s.irregular,
@@ -30,6 +33,7 @@ def summary_document(rec, rec_path) -> dict:
         "input_rate": None if rec.input_rate is None else
         {"min": float(rec.input_rate.min()), "max": float(rec.input_rate.max())},
         **_log_part(rec.meta.extra),
+        **({"time_read": read_as} if read_as else {}), "hints": [hint] if hint else [],
     }
 
 
@@ -59,6 +63,8 @@ def text_summary(doc: dict) -> str:
             lines.append(f"  {name}: {r['min']:.4g} ... {r['max']:.4g} degC")
     else:
         lines.append("  no temperature channel (thermal models need one)")
+    if doc.get("time_read"):
+        lines.append(f"  time column {doc['time_read']}")
     if doc["input_rate"] is not None:
         lines.append(f"  input_rate: {doc['input_rate']['min']:.6g} ... "
                      f"{doc['input_rate']['max']:.6g} deg/s")
@@ -68,6 +74,7 @@ def text_summary(doc: dict) -> str:
                      f"{log.get('log_instance')}, axis {log.get('axis', 'x')}; time "
                      f"{log.get('time_source')}")
     lines += [f"  warning: {w}" for w in doc.get("warnings") or []]
+    lines += [f"  hint: {h}" for h in doc.get("hints") or []]
     return "\n".join(lines)
 
 
@@ -97,6 +104,7 @@ def info(
     Examples:
       fogbayes info chamber_run.csv
       fogbayes info gyro.csv --output-unit deg/s --time-column t_s
+      fogbayes info lab.csv --delimiter ';' --decimal ','   # usually sniffed
       fogbayes info run.csv --json - > info.json
       fogbayes info flight.ulg --instance 1 --axis z
     """
@@ -106,12 +114,13 @@ def info(
                          temperature=temperature, input_rate=input_rate,
                          time_unit=time_unit, temperature_scale=temperature_scale,
                          temperature_offset=temperature_offset,
-                         topic=topic, instance=instance, axis=axis)
+                         topic=topic, instance=instance, axis=axis, tell=False)
     s = rec.sampling()
+    doc = summary_document(rec, rec_path, time_unit)
     if json_out:
-        write_json(summary_document(rec, rec_path), json_out)
+        write_json(doc, json_out)
     if json_out != "-":
-        typer.echo(text_summary(summary_document(rec, rec_path)))
+        typer.echo(text_summary(doc))
         if s.gaps:
             longest = max(s.gaps, key=lambda g: g.duration)
             typer.echo(f"{len(s.gaps)} gap(s) kept as they are (never interpolated); longest "

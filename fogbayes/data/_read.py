@@ -10,6 +10,10 @@ line an editor shows. Refused, where pandas alone would go on: two columns of on
 (pandas renames the second ``name.1``), a row with more or fewer fields than the header
 (one extra field shifts every column, a missing one becomes NaN), a ``#`` line after the
 header, a metadata key given twice with different values, NUL bytes, non-UTF-8 text.
+The field separator (``,``, ``;`` or tab) and the decimal mark (``.`` or ``,``) are sniffed
+from the header and the first data lines when only one reading fits (:func:`sniff`: a
+``;``-separated file with decimal commas, as spreadsheet programs in most of Europe write
+it, reads as it is); when two readings fit, the error names ``--delimiter``/``--decimal``.
 
 NPZ: read member by member from the ZIP archive (CRC checked), headers checked against the
 bytes actually present before anything is allocated (a header claiming 1e15 rows is an
@@ -29,6 +33,7 @@ import csv
 import io
 import json
 import math
+import re
 import zipfile
 import zlib
 from pathlib import Path
@@ -36,7 +41,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import (DuplicateColumnError, EmptyRecordingError, FileFormatError,
+from ..errors import (ArgumentError, DuplicateColumnError, EmptyRecordingError, FileFormatError,
                       FogbayesError, MetadataError, RaggedRowError, ShapeError)
 
 
@@ -57,14 +62,107 @@ def _first_line(exc: BaseException) -> str:
 
 
 # -- CSV -------------------------------------------------------------------------------
-def _split(line: str, quoted: bool) -> list[str]:
+#: Field separators tried when none is given, in this order, and their names for people.
+SEPARATORS = {",": "','", ";": "';'", "\t": "tab"}
+#: Decimal marks.
+DECIMALS = (".", ",")
+#: Data lines looked at to sniff the separator and the decimal mark.
+SNIFF_LINES = 200
+_COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
+_DOT_NUMBER = re.compile(r"[+-]?(?:\d+\.\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def _split(line: str, quoted: bool, sep: str = ",") -> list[str]:
     if not quoted:
-        return line.split(",")
-    return next(csv.reader([line], skipinitialspace=True), [""])
+        return line.split(sep)
+    return next(csv.reader([line], delimiter=sep, skipinitialspace=True), [""])
 
 
-def read_csv(path: Path) -> Table:
-    """Read a CSV recording; see the module doc for what is refused."""
+def csv_option(value: str | None, flag: str) -> str | None:
+    """A ``--delimiter`` (``,``, ``;``, ``tab`` or another single character) or ``--decimal``
+    (``.`` or ``,``) value as one character; None stays None (sniff it)."""
+    if value is None:
+        return None
+    v = {"tab": "\t", "\\t": "\t"}.get(str(value).strip().lower(), str(value))
+    if flag == "--decimal":
+        if v not in DECIMALS:
+            raise ArgumentError(f"{flag} {value!r}: the decimal mark is '.' or ','",
+                                column=flag, fix=f"give {flag} '.' or {flag} ','")
+        return v
+    if len(v) != 1 or v.isalnum() or v in "\"#.\n\r -+":
+        raise ArgumentError(f"{flag} {value!r} cannot separate fields", column=flag,
+                            fix=f"give one character, e.g. {flag} ',' or {flag} ';' or "
+                                f"{flag} tab")
+    return v
+
+
+def _sample(body: bytes) -> list[str]:
+    """The first :data:`SNIFF_LINES` non-blank, non-comment data lines of ``body``."""
+    head = body[:1 << 16]
+    lines = head.split(b"\n")
+    if len(head) < len(body):
+        lines = lines[:-1]  # the last one may be cut
+    out = []
+    for raw_line in lines:
+        line = raw_line.decode("utf-8", errors="replace")
+        if line.strip() and not line.lstrip().startswith("#"):
+            out.append(line)
+            if len(out) == SNIFF_LINES:
+                break
+    return out
+
+
+def sniff(header: str, sample: list[str], quoted: bool, *, delimiter: str | None,
+          decimal: str | None, src: str, line: int) -> tuple[str, str]:
+    """The field separator and decimal mark of a CSV file: those given, else sniffed.
+
+    Separator: each of :data:`SEPARATORS` that splits the header into two or more fields
+    and every sampled data line into as many; one such is taken, none leaves the one that
+    splits the header most (the ragged-row check then names the row), two or more are an
+    error naming ``--delimiter``. Decimal mark: ``.`` with a ``,`` separator; otherwise ``,``
+    when numbers in the sample are written ``0,63`` and none ``0.63``, ``.`` when the
+    reverse or neither, an error naming ``--decimal`` when both.
+    """
+    if delimiter is None:
+        fits = [d for d in SEPARATORS
+                if len(h := _split(header, quoted, d)) > 1
+                and all(len(_split(ln, quoted, d)) == len(h) for ln in sample)]
+        if len(fits) > 1:
+            names = " and ".join(SEPARATORS[d] for d in fits)
+            raise FileFormatError(
+                f"cannot tell the field separator: {names} each split the header and the "
+                "first rows into the same number of fields", file=src, line=line,
+                fix="name it, e.g. " + " or ".join(f"--delimiter {SEPARATORS[d]}"
+                                                   for d in fits))
+        delimiter = fits[0] if fits else max(
+            SEPARATORS, key=lambda d: len(_split(header, quoted, d)))
+    if decimal is None:
+        decimal = "."
+        if delimiter != ",":
+            cells = [c.strip().strip('"') for ln in sample for c in _split(ln, quoted, delimiter)]
+            comma = next((c for c in cells if _COMMA_NUMBER.fullmatch(c)), None)
+            dot = next((c for c in cells if _DOT_NUMBER.fullmatch(c)), None)
+            if comma is not None and dot is not None:
+                raise FileFormatError(
+                    f"cannot tell the decimal mark: the first rows hold both {comma!r} and "
+                    f"{dot!r}", file=src, line=line,
+                    fix="name it with --decimal ',' or --decimal '.' (and write every "
+                        "number with that mark)")
+            decimal = "," if comma is not None else "."
+    if decimal == delimiter:
+        raise ArgumentError(f"{SEPARATORS.get(delimiter, repr(delimiter))} cannot be both the "
+                            "field separator and the decimal mark", file=src,
+                            column="--decimal",
+                            fix="name another separator, e.g. --delimiter ';' --decimal ','")
+    return delimiter, decimal
+
+
+def read_csv(path: Path, *, delimiter: str | None = None, decimal: str | None = None) -> Table:
+    """Read a CSV recording; see the module doc for what is refused.
+
+    ``delimiter`` (``,``, ``;``, ``tab``, ...) and ``decimal`` (``.`` or ``,``): None sniffs
+    them (:func:`sniff`).
+    """
     import pandas as pd
 
     src = str(path)
@@ -121,7 +219,10 @@ def read_csv(path: Path) -> Table:
     body = raw[pos:]
     del raw
     quoted = b'"' in body or '"' in header
-    names = [c.strip() for c in _split(header, quoted)]
+    sep, dec = sniff(header, _sample(body), quoted,
+                     delimiter=csv_option(delimiter, "--delimiter"),
+                     decimal=csv_option(decimal, "--decimal"), src=src, line=header_line)
+    names = [c.strip() for c in _split(header, quoted, sep)]
     first: dict[str, int] = {}
     for k, name in enumerate(names):
         if not name:
@@ -135,9 +236,9 @@ def read_csv(path: Path) -> Table:
 
     # data lines: every non-blank line after the header, each with one field per column
     if quoted or b"#" in body:
-        offsets, counts, body = _scan_lines(body, quoted, src, header_line)
+        offsets, counts, body = _scan_lines(body, quoted, src, header_line, sep)
     else:
-        offsets, counts, body = _scan_bytes(body)
+        offsets, counts, body = _scan_bytes(body, sep)
     if offsets.size == 0:
         raise EmptyRecordingError("the file has a header line but no data rows", file=src,
                                   fix="check the file was written completely")
@@ -147,14 +248,18 @@ def read_csv(path: Path) -> Table:
         r, n_bad = int(bad[0]), int(bad.size)
         more = f"; {n_bad - 1} more row(s) differ" if n_bad > 1 else ""
         how = "an extra" if counts[r] > len(names) else "a missing"
+        other = next((d for d in SEPARATORS if d != sep and d in header), None)
+        name = "--delimiter" if other is None else f"--delimiter {SEPARATORS[other]}"
         raise RaggedRowError(
             f"cannot parse as CSV: {counts[r]} field(s) where the header has {len(names)} "
             f"({how} field shifts the columns after it){more}", file=src, row=r,
             line=int(row_lines[r]),
-            fix="give every row exactly one field per header column (commas separate "
-                "fields; write empty cells as ',,')")
+            fix=f"give every row exactly one field per header column ({SEPARATORS.get(sep, repr(sep))} "
+                f"separates fields; write empty cells as '{sep}{sep}'), or name the separator "
+                f"with {name} (and the decimal mark with --decimal)")
     try:
         df = pd.read_csv(io.BytesIO(body), header=None, names=names, index_col=False,
+                         sep=sep, decimal=dec,
                          skipinitialspace=True, skip_blank_lines=False, low_memory=False,
                          encoding="utf-8")
     except (pd.errors.ParserError, ValueError, OverflowError) as exc:
@@ -178,16 +283,17 @@ _BLANK = np.zeros(256, dtype=bool)
 _BLANK[[9, 10, 11, 12, 32]] = True  # tab, newline, vertical tab, form feed, space
 
 
-def _scan_bytes(body: bytes) -> tuple[np.ndarray, np.ndarray, bytes]:
+def _scan_bytes(body: bytes, sep: str = ",") -> tuple[np.ndarray, np.ndarray, bytes]:
     """Data lines of an unquoted CSV body without comment lines, vectorised: the 0-based
-    offset of each non-blank line, its number of fields, and the body without blank lines."""
+    offset of each non-blank line, its number of fields (``sep`` + 1), and the body without
+    blank lines."""
     a = np.frombuffer(body, dtype=np.uint8)
     starts = np.flatnonzero(a == 10) + 1
     starts = np.concatenate(([0], starts[starts < a.size]))
     if a.size == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), body
     text = np.add.reduceat(~_BLANK[a], starts, dtype=np.int64) > 0
-    commas = np.add.reduceat(a == 44, starts, dtype=np.int64)
+    commas = np.add.reduceat(a == ord(sep), starts, dtype=np.int64)
     offsets = np.flatnonzero(text)
     if offsets.size != starts.size:  # blank lines: drop them, so rows match data lines
         ends = np.concatenate((starts[1:], [a.size]))
@@ -197,7 +303,7 @@ def _scan_bytes(body: bytes) -> tuple[np.ndarray, np.ndarray, bytes]:
     return offsets, commas[offsets] + 1, body
 
 
-def _scan_lines(body: bytes, quoted: bool, src: str, header_line: int):
+def _scan_lines(body: bytes, quoted: bool, src: str, header_line: int, sep: str = ","):
     """:func:`_scan_bytes` line by line, for quoted fields and '#' characters."""
     offsets, counts, keep = [], [], []
     for k, raw_line in enumerate(body.split(b"\n")):
@@ -211,7 +317,7 @@ def _scan_lines(body: bytes, quoted: bool, src: str, header_line: int):
                 fix="move '# key: value' lines above the header line and delete comment "
                     "lines between data rows (two files joined into one?)")
         offsets.append(k)
-        counts.append(len(_split(line, quoted)) if quoted else line.count(",") + 1)
+        counts.append(len(_split(line, quoted, sep)) if quoted else line.count(sep) + 1)
         keep.append(raw_line)
     return (np.asarray(offsets, dtype=np.int64), np.asarray(counts, dtype=np.int64),
             b"\n".join(keep) + b"\n")

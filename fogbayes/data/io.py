@@ -37,6 +37,11 @@ from .recording import Metadata, Recording
 from .temperature_columns import META_KEY as TEMPERATURES_KEY
 from .temperature_columns import listed as listed_temperatures
 from .temperature_columns import temperature_columns
+from .time_units import named_time_columns, unit_in_name
+
+#: ``meta.extra`` key saying how the time column was chosen (not written by :func:`save`:
+#: a saved file's time is in seconds under ``time``).
+TIME_READ_KEY = "time_read"
 
 FORMATS = {".csv": "csv", ".txt": "csv", ".parquet": "parquet", ".pq": "parquet", ".npz": "npz"}
 _META_KEYS = ("unit", "sensor_id", "sample_rate", "scale_factor", TEMPERATURES_KEY)
@@ -57,12 +62,14 @@ def load(
     unit: str | None = None,
     scale_factor: float | None = None,
     sensor_id: str | None = None,
-    time_unit: str = "s",
+    time_unit: str | None = None,
     temperature_scale: float = 1.0,
     temperature_offset: float = 0.0,
     topic: str | None = None,
     instance: int | None = None,
     axis: str | None = None,
+    delimiter: str | None = None,
+    decimal: str | None = None,
 ) -> Recording:
     """Read a Recording from ``path`` (format from the extension; a gyro log by its suffix
     ``.ulg``, ``.bag``, ``.db3``, ``.mcap``, ``.bin``, or a ROS 2 bag folder).
@@ -77,11 +84,19 @@ def load(
         scale_factor: raw units per deg/s, for V/mV/Hz outputs.
         sensor_id: overrides the file's metadata.
         time_unit: unit of the time column: ``s``, ``ms``, ``us`` or ``ns`` (scaled to s).
+            None: the unit the column's name states (``time_ms``, ``time [us]``,
+            :mod:`fogbayes.data.time_units`), else ``s``. With the default ``time`` absent
+            and one column whose name states a unit, that column is the time, read in
+            that unit; either choice is recorded in ``meta.extra["time_read"]``.
         temperature_scale, temperature_offset: temperatures in deg C are
             ``temperature_scale * value + temperature_offset`` (raw sensor words, kelvin).
         topic, instance: gyro logs only: which gyro (:func:`fogbayes.data.logs.read_log`).
         axis: gyro logs only: ``x`` (default), ``y`` or ``z``, the body axis read as the
             output (``output="gyro_y"`` says the same).
+        delimiter, decimal: CSV only: the field separator (``,``, ``;``, ``tab``) and the
+            decimal mark (``.`` or ``,``); None sniffs them from the header and the
+            first rows (:func:`fogbayes.data._read.sniff`), an error naming the option when
+            two readings fit.
 
     The file is checked, not trusted (:mod:`fogbayes.data._read`): duplicate column
     names, ragged CSV rows, invalid metadata, damaged NPZ/Parquet files, a sample rate
@@ -94,12 +109,17 @@ def load(
     """
     path = Path(path)
     src = str(path)
-    divisor = time_divisor(time_unit)
+    if time_unit is not None:
+        time_divisor(time_unit)  # a bad unit fails before the file is read
     t_scale = finite(temperature_scale, "temperature_scale", nonzero=True)
     t_offset = finite(temperature_offset, "temperature_offset")
     if scale_factor is not None:
         scale_factor = finite(scale_factor, "scale_factor", positive=True)
     if is_log(path):
+        for flag, value in (("--delimiter", delimiter), ("--decimal", decimal)):
+            if value is not None:
+                raise ArgumentError(f"{flag} applies to CSV files only, not to gyro logs",
+                                    file=src, column=flag, fix=f"drop {flag}")
         table = read_log_for_load(path, time=time, output=output, unit=unit,
                                   time_unit=time_unit, topic=topic, instance=instance, axis=axis)
         time, output = "time", "output"
@@ -117,8 +137,19 @@ def load(
                                       f"({', '.join(LOG_SUFFIXES)} or a ROS 2 bag folder)")
         if not path.is_file():
             raise FileFormatError("file not found", file=src, fix="check the path")
-        reader = {"csv": _read_csv, "parquet": _read_parquet, "npz": _read_npz}[kind]
-        table = reader(path)
+        if kind == "csv":
+            table = _read_csv(path, delimiter=delimiter, decimal=decimal)
+        else:
+            for flag, value in (("--delimiter", delimiter), ("--decimal", decimal)):
+                if value is not None:
+                    raise ArgumentError(f"{flag} applies to CSV files only, not to "
+                                        f"'{path.suffix}' files", file=src, column=flag,
+                                        fix=f"drop {flag}")
+            table = {"parquet": _read_parquet, "npz": _read_npz}[kind](path)
+    time, time_unit, read_as = _time_column(table.columns, time, time_unit)
+    divisor = time_divisor(time_unit)
+    if read_as:
+        table.meta[TIME_READ_KEY] = read_as
     try:
         return _recording(path, table, time=time, output=output, temperature=temperature,
                           input_rate=input_rate, unit=unit, scale_factor=scale_factor,
@@ -130,6 +161,25 @@ def load(
                 and 0 <= exc.row < len(lines):
             exc.located(line=int(lines[exc.row]))
         raise
+
+
+def _time_column(columns, time: str, time_unit: str | None) -> tuple[str, str, str | None]:
+    """(time column, its unit, how they were chosen or None): ``time_unit`` None takes the
+    unit the name states; the default name ``time``, absent, is replaced by the one column
+    whose name states a unit (:mod:`fogbayes.data.time_units`)."""
+    picked = False
+    if time == "time" and time not in columns:
+        named = named_time_columns(columns)
+        if len(named) == 1:
+            time, picked = named[0], True
+    if time_unit is not None:
+        return time, time_unit, (f"'{time}' in {time_unit} (the only column whose name "
+                                 "states a time unit)" if picked else None)
+    named_unit = unit_in_name(time)
+    if named_unit is None:
+        return time, "s", None
+    return time, named_unit, (f"'{time}' in {named_unit}, the unit its name states "
+                              "(--time-unit overrides)")
 
 
 def _recording(path: Path, table: Table, *, time, output, temperature, input_rate, unit,
@@ -145,6 +195,12 @@ def _recording(path: Path, table: Table, *, time, output, temperature, input_rat
         if name not in columns:
             close = difflib.get_close_matches(name, list(columns), n=1, cutoff=0.5)
             hint = f"did you mean '{close[0]}'? " if close else ""
+            only = next(iter(columns)) if len(columns) == 1 else ""
+            seps = [d for d in (";", "\t", ",", "|") if d in only]
+            if seps:  # the header was not split: another separator than the one used
+                shown = "tab" if seps[0] == "\t" else f"'{seps[0]}'"
+                hint = (f"the header is one field holding {shown}: name the separator "
+                        f"with --delimiter {shown} (delimiter= in fogbayes.load), or ")
             raise MissingColumnError(
                 f"no column '{name}' ({role}); the file has {list(columns)}", file=src,
                 column=name, fix=f"{hint}rename the column or pass its name "
@@ -203,7 +259,7 @@ def save(rec: Recording, path: str | Path) -> Path:
             "sample_rate": rec.meta.sample_rate, "scale_factor": rec.scale_factor,
             TEMPERATURES_KEY: listed_temperatures(rec.temperature_names),
             **{k: v for k, v in rec.meta.extra.items()
-               if _jsonable(v) and k != TEMPERATURES_KEY}}
+               if _jsonable(v) and k not in (TEMPERATURES_KEY, TIME_READ_KEY)}}
     with atomic_path(path) as tmp:
         {"csv": _write_csv, "parquet": _write_parquet, "npz": _write_npz}[kind](tmp, cols, meta)
     return path
@@ -274,10 +330,21 @@ def _as_float(values: np.ndarray, src: str, name: str) -> np.ndarray:
         try:
             out[i] = float(str(v).strip())
         except ValueError:
+            comma = "," in str(v) and _is_number(str(v).strip().replace(",", ".", 1))
             raise NonNumericError(f"'{v}' is not a number", file=src, column=name, row=i,
-                                  fix="write plain decimal numbers (no units or text in cells)") from None
+                                  fix="name the decimal mark with --decimal ',' (and the field "
+                                      "separator with --delimiter)" if comma else
+                                  "write plain decimal numbers (no units or text in cells)") from None
     return out
 
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
 
 
 def _jsonable(v) -> bool:

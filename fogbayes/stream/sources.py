@@ -238,7 +238,7 @@ def open_source(path, *, time: str = "time", output: str = "output",
                 temperature: str | Sequence[str] | None = None,
                 input_rate: str | None = "input_rate", unit: str | None = None,
                 scale_factor: float | None = None, sensor_id: str | None = None,
-                time_unit: str = "s", temperature_scale: float = 1.0,
+                time_unit: str | None = None, temperature_scale: float = 1.0,
                 temperature_offset: float = 0.0) -> RecordSource:
     """Open a large recording for chunked reading (arguments as :func:`fogbayes.data.load`).
 
@@ -247,7 +247,9 @@ def open_source(path, *, time: str = "time", output: str = "output",
     """
     path = Path(path)
     src = str(path)
-    divisor = time_divisor(time_unit)
+    from ..data.time_units import unit_in_name
+
+    divisor = time_divisor(time_unit or unit_in_name(time) or "s")  # None: as load reads it
     t_scale = finite(temperature_scale, "temperature_scale", nonzero=True)
     t_offset = finite(temperature_offset, "temperature_offset")
     if path.is_dir():

@@ -89,7 +89,7 @@ def read_log_for_load(path: Path, *, time: str, output: str, unit: str | None,
     own stamps, its rates are in rad/s, its output is one of three axes (``output=
     "gyro_y"`` is another way to say ``axis="y"``)."""
     src = str(path)
-    if time != "time" or time_unit != "s":
+    if time != "time" or time_unit not in (None, "s"):
         flag = "--time-column" if time != "time" else "--time-unit"
         raise ArgumentError(f"{flag} does not apply to a gyro log: its time stamps are read "
                             "in seconds from the log itself", file=src, column=flag,
