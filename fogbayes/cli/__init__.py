@@ -32,7 +32,7 @@ def _root(quiet: bool = typer.Option(False, "--quiet", "-q",
 # Subcommands register themselves on import (order = order in --help).
 from . import allan, arma, batch, compensate, demo, export, fit, info, loop, plan, plan_chamber, pool, prior, report, simulate  # noqa: E402,F401
 
-_common.add_csv_options(app)  # --delimiter, --decimal: declared once, beside --time-unit
+_common.add_reading_options(app)  # every reader has every reading option
 
 
 class Terminated(SystemExit):

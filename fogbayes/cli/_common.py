@@ -99,52 +99,82 @@ QUIET_OPT = typer.Option(False, "--quiet", "-q", callback=_quiet,
                          help="No progress bars or status lines on stderr; results only.")
 
 
-#: The running command's ``--delimiter`` and ``--decimal`` (set by :func:`add_csv_options`),
-#: and the hints :func:`load_recording` found about its recordings' time columns.
-_READING: dict[str, Any] = {"delimiter": None, "decimal": None, "hints": []}
+#: The options that say how to read a recording, by :func:`load_recording` keyword: the
+#: option, the keyword of :func:`fogbayes.data.load` it becomes, and its Python type.
+#: Every command that reads a recording has them all (:func:`add_reading_options`), so a
+#: fix that names one names an option of the command that printed it.
+READING_OPTIONS = {
+    "column": (COLUMN_OPT, "output", str), "time_column": (TIME_COLUMN_OPT, "time", str),
+    "time_unit": (TIME_UNIT_OPT, "time_unit", str), "output_unit": (OUTPUT_UNIT_OPT, "unit", str),
+    "scale_factor": (SCALE_FACTOR_OPT, "scale_factor", float),
+    "temperature": (TEMPERATURE_OPT, "temperature", list[str]),
+    "input_rate": (INPUT_RATE_OPT, "input_rate", str),
+    "temperature_scale": (TEMPERATURE_SCALE_OPT, "temperature_scale", float),
+    "temperature_offset": (TEMPERATURE_OFFSET_OPT, "temperature_offset", float),
+    "topic": (TOPIC_OPT, "topic", str), "instance": (INSTANCE_OPT, "instance", int),
+    "axis": (AXIS_OPT, "axis", str), "delimiter": (DELIMITER_OPT, "delimiter", str),
+    "decimal": (DECIMAL_OPT, "decimal", str)}
+#: For the running command: the reading options :func:`add_reading_options` gave it and
+#: their values, and the hints :func:`load_recording` found about its time columns.
+_READING: dict[str, Any] = {"added": {}, "hints": []}
 
 
-def csv_options() -> dict[str, str | None]:
-    """``delimiter=``/``decimal=`` of :func:`fogbayes.data.load`, as the command line gave them."""
-    return {"delimiter": _READING["delimiter"], "decimal": _READING["decimal"]}
+def load_keywords(options: dict) -> dict:
+    """:func:`fogbayes.data.load` keywords from :func:`load_recording` ones."""
+    out = {READING_OPTIONS[k][1]: v for k, v in options.items()}
+    if "temperature" in out:
+        out["temperature"] = out["temperature"] or None  # no --temperature: the default set
+    return out
 
 
-def add_csv_options(app: typer.Typer) -> None:
+def added_reading_options() -> dict:
+    """The :func:`fogbayes.data.load` keywords of the reading options the running command
+    was given by :func:`add_reading_options` (for a command that calls ``load`` itself)."""
+    return load_keywords(_READING["added"])
+
+
+def _flags(param: inspect.Parameter) -> tuple:
+    return tuple(getattr(param.default, "param_decls", None) or ())
+
+
+def add_reading_options(app: typer.Typer) -> None:
     """Give every command that reads a recording -- one that declares ``--time-unit``
-    (:data:`TIME_UNIT_OPT`) -- the options ``--delimiter`` and ``--decimal``, placed after
-    it; :func:`load_recording` reads them. A :class:`FogbayesError` raised by such a command
-    after a time column looked like ms or us counted as seconds gets the ``--time-unit``
-    hint first in its fix (:func:`fogbayes.data.time_units.spacing_hint`): a window or a
-    rate that makes no sense in seconds mostly follows from the unit."""
+    (:data:`TIME_UNIT_OPT`) -- each of :data:`READING_OPTIONS` it does not declare itself
+    (``--delimiter`` and ``--decimal`` on all of them), placed after ``--time-unit``;
+    :func:`load_recording` reads their values. A :class:`FogbayesError` raised by such a
+    command after a time column looked like ms or us counted as seconds gets the
+    ``--time-unit`` hint first in its fix (:func:`fogbayes.data.time_units.spacing_hint`):
+    a window or a rate that makes no sense in seconds mostly follows from the unit."""
     for command in app.registered_commands:
         fn = command.callback
         sig = inspect.signature(fn, eval_str=True)
         params = list(sig.parameters.values())
         at = next((k for k, p in enumerate(params) if p.default is TIME_UNIT_OPT), None)
-        if at is None or "delimiter" in sig.parameters:
+        if at is None:
             continue
-        kind = params[at].kind
-        params[at + 1:at + 1] = [inspect.Parameter("delimiter", kind, default=DELIMITER_OPT,
-                                                   annotation=str),
-                                 inspect.Parameter("decimal", kind, default=DECIMAL_OPT,
-                                                   annotation=str)]
-        command.callback = _reading_csv(fn, sig.replace(parameters=params))
+        have = {f for p in params for f in _flags(p)}
+        added = [inspect.Parameter(name, params[at].kind, default=opt, annotation=kind)
+                 for name, (opt, _, kind) in READING_OPTIONS.items()
+                 if name not in sig.parameters and opt.param_decls[0] not in have]
+        params[at + 1:at + 1] = added
+        command.callback = _with_reading(fn, sig.replace(parameters=params),
+                                         [p.name for p in added])
 
 
-def _reading_csv(fn, signature: inspect.Signature):
+def _with_reading(fn, signature: inspect.Signature, names: list[str]):
     @functools.wraps(fn)
-    def command(*args, delimiter=None, decimal=None, **kwargs):
-        _READING.update(delimiter=delimiter, decimal=decimal, hints=[])
+    def command(*args, **kwargs):
+        _READING.update(added={k: kwargs.pop(k) for k in names}, hints=[])
         try:
             return fn(*args, **kwargs)
         except FogbayesError as exc:
             hints = _READING["hints"]
-            if hints and "--time-unit" not in str(exc):
+            if hints and hints[0] not in str(exc):
                 exc.fix = f"{hints[0]}; otherwise {exc.fix}" if exc.fix else hints[0]
                 exc.args = (exc._compose(),)
             raise
         finally:
-            _READING.update(delimiter=None, decimal=None, hints=[])
+            _READING.update(added={}, hints=[])
 
     command.__signature__ = signature
     command.__annotations__ = {p.name: p.annotation for p in signature.parameters.values()
@@ -152,33 +182,30 @@ def _reading_csv(fn, signature: inspect.Signature):
     return command
 
 
-def load_recording(path: Path, *, column: str = "output", time_column: str = "time",
-                   output_unit: str | None = None, scale_factor: float | None = None,
-                   temperature: list[str] | None = None,
-                   input_rate: str = "input_rate", time_unit: str | None = None,
-                   temperature_scale: float = 1.0,
-                   temperature_offset: float = 0.0, topic: str | None = None,
-                   instance: int | None = None, axis: str | None = None,
-                   tell: bool = True) -> Recording:
-    """Load a Recording with the command line's column/unit overrides (and, for a gyro
-    log, its ``--topic``, ``--instance`` and ``--axis``; for CSV, ``--delimiter`` and
-    ``--decimal``). What :func:`time_notes` finds is said on stderr (``tell``) and kept as
-    the hint of the command's errors (:func:`add_csv_options`)."""
+def load_recording(path: Path, *, tell: bool = True, **options) -> Recording:
+    """Load a Recording as the command line says: ``options`` are :data:`READING_OPTIONS`
+    keywords (``column``, ``time_column``, ``time_unit``, ``output_unit``,
+    ``scale_factor``, ``temperature``, ``input_rate``, ``temperature_scale``,
+    ``temperature_offset``; for a gyro log ``topic``, ``instance``, ``axis``; for CSV
+    ``delimiter``, ``decimal``), those the command does not declare itself taken from the
+    options :func:`add_reading_options` gave it, the rest at their defaults. What
+    :func:`time_notes` finds is said on stderr (``tell``) and kept as the hint of the
+    command's errors."""
     from ..errors import ArgumentError
 
+    unknown = set(options) - set(READING_OPTIONS)
+    if unknown:
+        raise TypeError(f"load_recording got unknown options {sorted(unknown)}")
+    options = {**_READING["added"], **options}
     try:
-        rec = load(path, time=time_column, output=column, unit=output_unit,
-                   scale_factor=scale_factor, temperature=temperature or None,
-                   input_rate=input_rate, time_unit=time_unit,
-                   temperature_scale=temperature_scale, temperature_offset=temperature_offset,
-                   topic=topic, instance=instance, axis=axis, **csv_options())
+        rec = load(path, **load_keywords(options))
     except ArgumentError as exc:  # name the command-line flag, not fogbayes.load's keyword
         flag = "--" + (exc.column or "").lstrip("-").replace("_", "-")
         if exc.column not in ("temperature_scale", "temperature_offset", "scale_factor"):
             raise
         raise ArgumentError(exc.problem.replace(exc.column, flag), column=flag,
                             fix=(exc.fix or "").replace(exc.column, flag)) from None
-    read_as, hint = time_notes(rec, path, time_unit)
+    read_as, hint = time_notes(rec, path, options.get("time_unit"))
     if hint:
         _READING["hints"].append(hint)
     if tell:

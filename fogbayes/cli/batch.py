@@ -18,7 +18,8 @@ from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
                       TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, refuse_overwrite, say,
                       write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT, csv_options
+from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
+from ._common import added_reading_options
 
 _EPILOG = """Examples:
 
@@ -87,7 +88,7 @@ def batch(
             "scale_factor": scale_factor, "temperature": temperature or None,
             "input_rate": input_rate, "time_unit": time_unit,
             "temperature_scale": temperature_scale, "temperature_offset": temperature_offset,
-            **csv_options()}
+            **added_reading_options()}
     from ..data.checks import finite, time_divisor
 
     if time_unit is not None:

@@ -254,9 +254,10 @@ def read_csv(path: Path, *, delimiter: str | None = None, decimal: str | None = 
             f"cannot parse as CSV: {counts[r]} field(s) where the header has {len(names)} "
             f"({how} field shifts the columns after it){more}", file=src, row=r,
             line=int(row_lines[r]),
-            fix=f"give every row exactly one field per header column ({SEPARATORS.get(sep, repr(sep))} "
-                f"separates fields; write empty cells as '{sep}{sep}'), or name the separator "
-                f"with {name} (and the decimal mark with --decimal)")
+            fix=f"give every row exactly one field per header column "
+                f"({SEPARATORS.get(sep, repr(sep))} separates fields; write empty cells as "
+                f"'{sep}{sep}'), or name the separator with {name} (and the decimal mark "
+                "with --decimal)")
     try:
         df = pd.read_csv(io.BytesIO(body), header=None, names=names, index_col=False,
                          sep=sep, decimal=dec,

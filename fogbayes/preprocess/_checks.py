@@ -81,7 +81,9 @@ def check_window(window_s: float, t: np.ndarray, *, name: str = "window_s",
     # 1e-9 relative slack: a window equal to the step written as 1/fs must pass.
     if w < dt * (1 - 1e-9):
         raise TooShortError(f"{name}={w:g} s is shorter than the sample interval {dt:g} s",
-                            column=name, fix=f"use {name} >= {dt:g} s (one sample per block)")
+                            column=name, fix=f"use {name} >= {dt:g} s (one sample per block), "
+                                             "or read the times in seconds (--time-unit ms, "
+                                             "us or ns; time_unit= in fogbayes.load)")
     span = float(t[-1] - t[0] + dt)
     if n_blocks * w > span * (1 + 1e-9):
         need = ("longer than the record" if n_blocks == 1
