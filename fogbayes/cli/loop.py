@@ -133,7 +133,9 @@ def loop(
         say(f"wrote {report}")
     if prior is not None:
         say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")
-    added = ", ".join(res.effects) or "nothing"
+    from ..report.effects import effect_phrase
+
+    added = "; ".join(effect_phrase(s.effect, s.detail, s.covariates) for s in res.steps) or "nothing"
     reason = res.stop.reason
     if res.effects and reason.startswith("no candidate"):  # after additions: none *further*
         reason = "no further" + reason[len("no"):]

@@ -188,6 +188,11 @@ def _evidence(tr: Trial, d: el.ElpdDiff | None, opts: Options, n_cand: int, tria
             "screening": ranking}
 
 
+def _two_looks(log_p: float) -> float:
+    """Bonferroni log p of the better of two looks: log min(1, 2 p) (a p-value is at most 1)."""
+    return min(0.0, log_p + math.log(2.0))
+
+
 def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
                 cache: dict | None = None):
     """Screened candidates, each with the whitened model it was screened against.
@@ -220,12 +225,12 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
         for s2 in screened2:
             have = pairs.get(s2.candidate.effect)
             gate = 0.0 if have is None else have[0].log_p  # not screenable under the fit: p 1
-            s2 = s2._replace(log_p=s2.log_p + math.log(2.0), gate_log_p=gate)
-            if have is None or s2.log_p < have[0].log_p + math.log(2.0):
-                pairs[s2.candidate.effect] = (s2, wm2)
+            if have is None or s2.log_p < have[0].log_p:
+                pairs[s2.candidate.effect] = (s2._replace(log_p=_two_looks(s2.log_p),
+                                                          gate_log_p=gate), wm2)
             else:
                 pairs[s2.candidate.effect] = (have[0]._replace(
-                    log_p=have[0].log_p + math.log(2.0), gate_log_p=gate), have[1])
+                    log_p=_two_looks(have[0].log_p), gate_log_p=gate), have[1])
     return sorted(pairs.values(), key=lambda p: p[0].log_p)
 
 

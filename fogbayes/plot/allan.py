@@ -11,7 +11,12 @@ import numpy as np
 
 from .style import COLORS, escape_mathtext, new_figure
 
-_TERM_COLORS = {"Q": "#8e44ad", "N": "#16a085", "B": "#d35400", "K": "#2980b9", "R": "#7f8c8d"}
+# One hue family per term (purple, green, orange, blue; the ramp near-black), hues at least
+# 45 degrees apart and a CIE76 colour difference of at least 35 from each other, the data
+# grey and the fit's red; each term also has its own dash pattern, for print without colour.
+_TERM_COLORS = {"Q": "#7b3294", "N": "#1a9850", "B": "#e08214", "K": "#2166ac", "R": "#222222"}
+_TERM_DASHES = {"Q": (0, (1, 1.5)), "N": (0, (5, 2)), "B": (0, (3, 1.5, 1, 1.5)),
+                "K": (0, (8, 2, 2, 2)), "R": (0, (2, 2))}
 _TERM_NAMES = {"Q": "quantization", "N": "angle random walk", "B": "bias instability",
                "K": "rate random walk", "R": "rate ramp"}
 
@@ -22,11 +27,11 @@ def allan_figure(doc: dict, *, title: str | None = None):
     from ..data.axes_doc import is_axes_document
 
     if not is_axes_document(doc):
-        fig, ax = new_figure(figsize=(10.0, 4.6))
+        fig, ax = new_figure(figsize=(10.0, 5.4))
         _draw(ax, doc, title or f"Allan deviation, {doc.get('sensor_id', '')}".rstrip(", "))
         return fig
     axes = doc["axes"]
-    fig, panels = new_figure(nrows=len(axes), figsize=(10.0, 4.0 * len(axes)), squeeze=False)
+    fig, panels = new_figure(nrows=len(axes), figsize=(10.0, 5.0 * len(axes)), squeeze=False)
     for ax, (name, sub) in zip(panels[:, 0], axes.items()):
         sensor = sub.get("sensor_id") or ""
         _draw(ax, sub, f"{title or 'Allan deviation'}, axis {name}" + (f": {sensor}" if sensor else ""))
@@ -59,7 +64,7 @@ def _draw(ax, doc: dict, title: str) -> None:
         ax.plot(curves["tau"], curves["total"], color=COLORS["model"],
                 label=f"fit ({fit.get('method', '')})")
         for t, y in curves["terms"].items():
-            ax.plot(curves["tau"], y, ls="--", lw=0.9, color=_TERM_COLORS[t],
+            ax.plot(curves["tau"], y, ls=_TERM_DASHES[t], lw=1.1, color=_TERM_COLORS[t],
                     label=_label(t, fit["terms"].get(t)))
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -67,11 +72,13 @@ def _draw(ax, doc: dict, title: str) -> None:
     ax.set_xlabel("averaging time tau (s)")
     ax.set_ylabel(f"Allan deviation ({doc.get('unit', 'deg/h')})")
     ax.set_title(escape_mathtext(title))
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    # below the plot, two columns: the plot keeps the figure's width
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, borderaxespad=0,
+              columnspacing=1.2, handlelength=2.6)
 
 
 def _label(term: str, est: dict | None) -> str:
     if not est:
         return _TERM_NAMES[term]
-    return (f"{_TERM_NAMES[term]}: {term} = {est['value']:.3g} "
-            f"[{est['low']:.3g}, {est['high']:.3g}] {est['unit']}")
+    return (f"{term} = {est['value']:.3g} [{est['low']:.3g}, {est['high']:.3g}] "
+            f"{est['unit']} ({_TERM_NAMES[term]})")

@@ -4,7 +4,8 @@
 For every added effect: the residual of the model *before* the step (10 s block means)
 against time with the added term's fitted contribution on top, and the same residual
 against the term's own driver (a partial-residual plot) -- the residual that justified
-the addition. Noise steps show the autocorrelation of the whitened residual instead.
+the addition. A term driven by time itself (a step, a drift) shows the residual before and
+after the step instead, since against time the first panel would be drawn twice. Noise steps show the autocorrelation of the whitened residual instead.
 """
 
 from __future__ import annotations
@@ -21,6 +22,10 @@ _DRIVER_LABELS = {"rate": "dT/dt [°C/min]", "rate_poly": "dT/dt [°C/min]",
                   "drift_exp": "time [h]", "step": "time [h]", "drift_tpoly": "time [h]",
                   "omega_poly": "input rate [°/s]", "omega_abs": "input rate [°/s]",
                   "omega_tpoly": "input rate [°/s]"}
+
+
+#: term kinds whose driver is time: their partial-residual panel would repeat the time panel
+TIME_DRIVEN = ("drift_lin", "drift_exp", "step", "drift_tpoly")
 
 
 def driver(term, cov):
@@ -70,13 +75,23 @@ def step_figure(res, i: int):
     contrib = before.residual - s.fit.residual
     tc, cb = _blocks(t, contrib, out)
     ax[0].plot(tc / 3600, cb, color=model_color("loop"), label=f"model change:\n+ {s.effect}")
-    drv, dlabel = driver(s.term, ctx.cov)
-    _, db = _blocks(t, drv, out)
-    ax[1].plot(db, rb, ".", ms=2, color=COLORS["data"], label="residual before")
-    ax[1].plot(db, cb, ".", ms=2, color=model_color("loop"), label=f"+ {s.effect}")
-    ax[1].set_xlabel(dlabel)
+    if s.term.kind in TIME_DRIVEN:
+        # the driver is time itself: against it the first panel would be drawn again, so
+        # the second shows what the step leaves, the residual after it
+        ta, ra = _blocks(t, s.fit.residual, out)
+        ax[1].plot(tb / 3600, rb, ".", ms=2, color=COLORS["data"], label="residual before")
+        ax[1].plot(ta / 3600, ra, ".", ms=2, color=model_color("loop"),
+                   label=f"residual after\n+ {s.effect}")
+        ax[1].set_xlabel("time [h]")
+        ax[1].set_title(f"residual before and after adding {s.effect}")
+    else:
+        drv, dlabel = driver(s.term, ctx.cov)
+        _, db = _blocks(t, drv, out)
+        ax[1].plot(db, rb, ".", ms=2, color=COLORS["data"], label="residual before")
+        ax[1].plot(db, cb, ".", ms=2, color=model_color("loop"), label=f"+ {s.effect}")
+        ax[1].set_xlabel(dlabel)
+        ax[1].set_title("residual against the added term's driver")
     ax[1].set_ylabel("10 s means [deg/h]")
-    ax[1].set_title("residual against the added term's driver")
     ax[1].legend(**LEGEND_RIGHT)
     ax[0].set_xlabel("time [h]")
     ax[0].set_ylabel("10 s means [deg/h]")

@@ -2,8 +2,9 @@
 
 The loop document's calibration (:mod:`fogbayes.loop.calibration`) is applied to the
 recording being reported -- usually another run of the sensor -- and the report says what
-was applied (each term, sensor property or run event, its coefficient +- 1 s.e. on the
-centred/scaled column), what was left out, where the recording leaves the calibrated
+was applied (each term, sensor property or run event, in physical units +- 1 s.e. -- the
+base polynomial in its raw form -- beside its coefficient on the centred/scaled column),
+what was left out, where the recording leaves the calibrated
 range, and the bias stability before/after with its bootstrap interval.
 """
 
@@ -29,24 +30,88 @@ def apply_loop_document(rec, doc: dict):
     return applied, residual
 
 
+def physical_rows(cal: dict) -> list[tuple[str, str, str, str]]:
+    """Per term of a loop calibration: (effect, kind, reading in physical units, fitted
+    value on the centred, scaled column(s)).
+
+    The base polynomial (intercept + ``tpoly`` of one channel) is expanded to its raw form,
+    bias = sum_j a_j T^j with T in °C (origin 0 °C): with z = (T - c) / s,
+    c_k z^k = c_k s^-k sum_j binom(k, j) (-c)^(k-j) T^j, so a = A beta and the standard
+    errors are sqrt(diag(A Cov A^T)) from the document's covariance. Every other term is
+    read by its kind (:func:`fogbayes.diagnose.terms.describe`), the phrase of the loop
+    report (:func:`fogbayes.report.effects.effect_phrase`).
+    """
+    from math import comb
+
+    from ..diagnose.terms import Term, describe
+    from .effects import effect_phrase
+    from .html import fmt
+    from .labels import coefficient_unit
+
+    beta = np.asarray(cal["coefficients"], float)
+    se = np.asarray(cal.get("stderr") or [np.nan] * beta.size, float)
+    cov = cal.get("covariance")
+    cov = np.asarray(cov, float) if cov is not None else np.diag(se ** 2)
+    spans, i = [], 0
+    for t in cal["terms"]:
+        k = len(t.get("labels") or [t["kind"]])
+        spans.append((t, slice(i, i + k)))
+        i += k
+
+    def scaled(t, sl):
+        labs = t.get("labels") or [t["kind"]]
+        return ", ".join(f"{lab} {fmt(b, sig=4)} ± {fmt(e, sig=2)}"
+                         for lab, b, e in zip(labs, beta[sl], se[sl]))
+
+    rows = []
+    base = [(t, sl) for t, sl in spans if t["kind"] in ("intercept", "tpoly")]
+    channels = {t["params"].get("channel") for t, _ in base if t["kind"] == "tpoly"}
+    if base and len(channels) <= 1 and sum(t["kind"] == "intercept" for t, _ in base) <= 1 \
+            and sum(t["kind"] == "tpoly" for t, _ in base) <= 1:
+        order = max([max(t["params"]["powers"]) for t, _ in base if t["kind"] == "tpoly"] or [0])
+        A = np.zeros((order + 1, beta.size))
+        for t, sl in base:
+            if t["kind"] == "intercept":
+                A[0, sl.start] = 1.0
+                continue
+            c, sc = float(t["params"]["centre"]), float(t["params"]["scale"])
+            for col, k in zip(range(sl.start, sl.stop), t["params"]["powers"]):
+                for j in range(k + 1):
+                    A[j, col] += comb(k, j) * (-c) ** (k - j) / sc ** k
+        a = A @ beta
+        a_se = np.sqrt(np.clip(np.einsum("ij,jk,ik->i", A, cov, A), 0.0, None))
+        units = {"output": "deg/h", "T": "degC"}
+        reading = "; ".join(
+            f"{'constant' if j == 0 else f'T^{j}'} {fmt(a[j], sig=4)} ± {fmt(a_se[j], sig=2)} "
+            f"{coefficient_unit([j], ['T'], units)}" for j in range(order + 1))
+        rows.append(("base", " + ".join(t["kind"] for t, _ in base),
+                     f"bias polynomial in T [°C], origin 0 °C: {reading}",
+                     "; ".join(scaled(t, sl) for t, sl in base)))
+        spans = [(t, sl) for t, sl in spans if (t, sl) not in base]
+    for t, sl in spans:
+        detail = describe(Term(t["kind"], t.get("params") or {}), beta[sl], se[sl])
+        detail.pop("term", None)
+        rows.append((t["effect"], t["kind"], effect_phrase(t["effect"], detail).split(": ", 1)[-1]
+                     if t["effect"] != "base" else effect_phrase(t["kind"], detail),
+                     scaled(t, sl)))
+    return rows
+
+
 def calibration_section(doc: dict, applied) -> Section:
-    """The terms applied, with their coefficients, and what the report user should know."""
+    """The terms applied, in physical units (raw form), and what the report user should know."""
     cal = doc["calibration"]
     sec = Section("Calibration applied (from the closed loop)")
     run = doc["input"].get("file") or "its run"
-    sec.text(f"Model '{doc['model']}' as the loop left it on {run} ({doc['schema']}); "
-             "coefficients in deg/h on centred, scaled columns, +- 1 s.e.")
-    se = cal.get("stderr") or [float("nan")] * len(cal["coefficients"])
-    rows, i = [], 0
+    sec.text(f"Model '{doc['model']}' as the loop left it on {run} ({doc['schema']}). Each "
+             "term in physical units, ± 1 s.e. (the loop report's numbers); the value fitted "
+             "on the term's centred, scaled column, in deg/h, is beside it.")
     skipped = {s["kind"] for s in applied.skipped}
-    for t in cal["terms"]:
-        k = len(t.get("labels") or [t["kind"]])
-        for lab, c, s in zip(t.get("labels") or [t["kind"]], cal["coefficients"][i:i + k],
-                             se[i:i + k]):
-            rows.append([t["effect"], t["kind"], lab, f"{c:.6g}", f"{s:.3g}",
-                         "left out (run event)" if t["kind"] in skipped else t["applies"]])
-        i += k
-    sec.table(["effect", "term", "column", "coefficient (deg/h)", "s.e.", "applied as"], rows)
+    applies = {t["kind"]: t["applies"] for t in cal["terms"]}
+    rows = [[effect, kind, reading, scaled_text,
+             "left out (run event)" if kind in skipped else applies.get(kind.split(" + ")[0], "")]
+            for effect, kind, reading, scaled_text in physical_rows(cal)]
+    sec.table(["effect", "term", "in physical units (± 1 s.e.)",
+               "fitted on the centred, scaled column [deg/h]", "applied as"], rows)
     for o in applied.outside:
         lo, hi = o["calibrated"]
         sec.note(f"{o['covariate']}: {100 * o['share']:.1f} % of the samples lie outside the "

@@ -17,7 +17,10 @@ LABELS: dict[str, tuple[str, str]] = {
     "n_blocks": ("averaged blocks fitted", ""),
     "n_params": ("coefficients", ""),
     "rms_criterion": ("RMS of the fit residual (block means)", "deg/h"),
-    "residual_std": ("residual standard deviation (block means)", "deg/h"),
+    # s = sqrt(wRSS / dof) of the block means weighted by their sample counts: the scatter
+    # of one sample (a block mean of n samples scatters by s / sqrt(n))
+    "residual_std": ("residual standard deviation per sample (count-weighted block fit)",
+                     "deg/h"),
     "dof": ("degrees of freedom", ""),
     "method": ("method", ""),
     # sampler convergence (bayes.convergence)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..plot.loop import overview_figure, step_figure
+from .effects import effect_phrase
 
 
 def loop_intervals(res):
@@ -45,18 +46,6 @@ def _what(res) -> str:
     return " · ".join(parts)
 
 
-def _unit_from_key(key: str) -> str:
-    """``'deg_h_per_degC_per_min'`` -> ``'deg/h per (°C/min)'`` (units spelled in JSON keys)."""
-    def one(u):
-        return {"deg_h": "deg/h", "degC": "°C", "deg_s": "°/s", "min": "min", "s": "s",
-                "h": "h"}.get(u, u.replace("_", "/"))
-    num, *den = key.split("_per_")
-    if not den:
-        return one(num)
-    d = "/".join(one(x) for x in den)
-    return f"{one(num)} per ({d})" if len(den) > 1 else f"{one(num)} per {d}"
-
-
 def loop_headline(res, rec=None):
     """The headline section of a loop report: what the loop added, with intervals."""
     from ..errors import FogbayesError
@@ -74,15 +63,7 @@ def loop_headline(res, rec=None):
             f"The loop added {', '.join(res.effects) or 'nothing'}; the record is too short "
             "for a bias stability with an interval."))
     if res.steps:
-        desc = []
-        for st in res.steps:
-            coef = next((v for k, v in st.detail.items() if k.startswith("coefficient_")
-                         and isinstance(v, dict) and "value" in v), None)
-            unit = next((_unit_from_key(k[len("coefficient_"):]) for k in st.detail
-                         if k.startswith("coefficient_")), "")
-            c = (f", coefficient {fmt(coef['value'])} ± {fmt(coef.get('stderr'), sig=2)} {unit}"
-                 if coef else "")
-            desc.append(f"{st.effect} ({', '.join(st.covariates)}{c})")
+        desc = [effect_phrase(st.effect, st.detail, st.covariates) for st in res.steps]
         sentence, ok = improvement_verdict(added, f"The loop added {'; '.join(desc)}. This")
     else:
         sentence = (f"Nothing supported: the loop added no effect to {res.model} "
@@ -117,7 +98,7 @@ def loop_section(res):
                                               "model (10 s means).")
     for i, s in enumerate(res.steps):
         e = s.evidence
-        sec.text(f"Step {i + 1}: added {s.effect} ({', '.join(s.covariates)}). "
+        sec.text(f"Step {i + 1}: added {effect_phrase(s.effect, s.detail, s.covariates)}. "
                  f"Likelihood ratio 2 dlogL = {fmt(e['likelihood_ratio'])}, calibrated log10 p = "
                  f"{fmt(e['log10_p'], sig=3)} (family-wise {fmt(e['log10_p_familywise'], sig=3)}); "
                  f"ELPD gain {fmt(e['elpd_diff'])} ± {fmt(e['elpd_diff_se'], sig=3)} nats. "
