@@ -92,27 +92,82 @@ def test_shrink_is_the_conjugate_normal_update():
     assert np.allclose(np.cov(d2[:, 0].T), S - S @ np.linalg.solve(S + c2[0], S), atol=0.003)
 
 
-@pytest.mark.parametrize("y, sig2, mu, sd", [(0.0, 0.3**2, 0.5, 0.4), (-2.0, 1.0, 0.0, 0.1),
-                                              (1.0, 0.05**2, -1.0, 2.0), (0.2, 0.5, 0.2, 1e-3)])
-def test_censored_likelihood_and_draws_against_quadrature(y, sig2, mu, sd):
-    """The flat-below likelihood of an unresolved term integrated against the population
-    normal: closed form vs numerical quadrature; shrink's rejection draws vs the mean of the
-    normalised product (quadrature)."""
-    from scipy import integrate, stats
+def _censored_lik(t, y, var, c):
+    """The likelihood of an unresolved term, written out here independently: normal in
+    x = log((v - v_hat + S) / S), v = e^(2t), v_hat = e^(2y), S = e^(2c), variance var."""
+    x = np.log((np.exp(2 * t) - np.exp(2 * y) + np.exp(2 * c)) / np.exp(2 * c))
+    return np.exp(-(x**2) / (2 * var))
 
-    from fogbayes.pool.normal import _censored_log_lik
 
-    lik = lambda t: 1.0 if t <= y else np.exp(-(t - y) ** 2 / (2 * sig2))  # noqa: E731
-    dens = lambda t: lik(t) * stats.norm.pdf(t, mu, sd)  # noqa: E731
-    lo, hi = mu - 12 * sd, mu + 12 * sd
-    ref = integrate.quad(dens, lo, hi, points=[y] if lo < y < hi else None, limit=200)[0]
-    assert np.isclose(float(np.exp(_censored_log_lik(y, sig2, mu, sd))), ref, rtol=1e-7)
-    mean = integrate.quad(lambda t: t * dens(t), lo, hi, points=[y] if lo < y < hi else None,
-                          limit=200)[0] / ref
-    D = 20_000
-    d = shrink(np.array([[y]]), np.array([[[sig2]]]), np.full((D, 1), mu), np.full((D, 1), sd),
-               np.random.default_rng(1), cens=np.ones((1, 1)))
-    assert abs(d[:, 0, 0].mean() - mean) < 5 * sd / np.sqrt(D) + 1e-3 * sd
+@pytest.mark.parametrize("y, var, c", [(0.0, 0.3**2, 0.5), (-2.0, 1.0, -1.9), (1.0, 0.05**2, 3.0),
+                                       (0.2, 0.5, 0.2005)])
+def test_censored_likelihood_is_level_towards_zero_and_log_quadratic_above(y, var, c):
+    """An unresolved term's likelihood: 1 at the estimate, level towards v = 0 at
+    exp(-log(1 - v_hat/S)^2 / (2 var)), about normal in v near the estimate, normal in
+    log v far above it; a one-term block of the joint form in unit_log_lik is the same."""
+    from fogbayes.pool.normal import censored_log_lik, unit_log_lik
+
+    t = np.linspace(y - 30, y + 3, 301)
+    assert np.allclose(np.exp(np.asarray(censored_log_lik(t, y, var, c))),
+                       _censored_lik(t, y, var, c), rtol=1e-9, atol=1e-300)
+    level = np.exp(-np.log1p(-np.exp(2 * (y - c))) ** 2 / (2 * var))
+    assert np.isclose(float(np.exp(censored_log_lik(y - 40.0, y, var, c))), level)
+    both = [float(unit_log_lik(np.array([1.0, y]), np.diag([0.04, var]), np.array([0.0, 1.0]),
+                               np.array([1.0, 0.0]), np.array([0.2, 1.0]),
+                               np.array([0.0, x]), np.array([0.0, c]))) for x in (y - 1, y + 0.5)]
+    gauss = -0.5 * np.log(2 * np.pi * (0.04 + 0.2**2))
+    assert np.allclose(both, [gauss + float(censored_log_lik(x, y, var, c))
+                              for x in (y - 1, y + 0.5)])
+
+
+def test_population_with_unresolved_units_matches_grid_quadrature():
+    """Three units resolve the term (normal in log), three do not (the likelihood above,
+    their parameters sampled with the population): the NUTS posterior of the population
+    median and spread against the same posterior on a (mu, s) grid, each unresolved unit's
+    parameter integrated out by quadrature (an independent computation), and the sampler's
+    draws of an unresolved unit's parameter against its posterior mean by quadrature."""
+    from numpyro.diagnostics import effective_sample_size
+
+    y = np.array([[-3.9], [-3.6], [-3.75], [-3.7], [-4.6], [-6.0]])
+    sd = np.array([0.15, 0.2, 0.1, 0.5, 0.3, 0.8])
+    ceil = np.array([[0.0], [0.0], [0.0], [-3.5], [-3.3], [-3.4]])
+    cens = np.array([[0.], [0.], [0.], [1.], [1.], [1.]])
+    cov = (sd**2)[:, None, None]
+    res = fit_pool(y, cov, ("b",), censored=cens, ceiling=ceil, seed=4, outliers=False)
+    assert res.diagnostics["converged"]
+    ess = res.diagnostics["ess_min"]
+    mu = np.linspace(-14.0, 2.0, 321)
+    s = np.arange(0.0025, 2.5, 0.005)  # cell midpoints: the spread's lower tail is near 0
+    zg = np.linspace(-8.0, 8.0, 401)
+    phi = np.exp(-0.5 * zg**2) / np.sqrt(2 * np.pi)
+    M, S = np.meshgrid(mu, s, indexing="ij")
+    r = cens[:, 0] == 0
+    tot = S[..., None] ** 2 + sd[r] ** 2
+    logp = (-0.5 * ((y[r, 0] - M[..., None]) ** 2 / tot + np.log(tot)).sum(-1)
+            - 0.5 * ((M - np.median(y)) / MU_PRIOR_SD) ** 2 - 0.5 * (S / SPREAD_PRIOR_SD) ** 2)
+
+    def moments(u, k):
+        """integrals of lik(theta) N(theta; mu, s_k^2) and of theta times it, theta = mu + s z"""
+        th = mu[:, None] + s[k] * zg[None, :]
+        w = _censored_lik(th, y[u, 0], sd[u] ** 2, ceil[u, 0]) * phi
+        return np.trapezoid(w, zg, axis=-1), np.trapezoid(w * th, zg, axis=-1)
+
+    mom = {u: [moments(u, k) for k in range(s.size)] for u in np.flatnonzero(~r)}
+    for u, m in mom.items():
+        logp += np.log(np.stack([m0 for m0, _ in m], axis=1))
+    p = np.exp(logp - logp.max())
+    p /= p.sum()
+    for draws, grid, wt in ((res.mu[:, 0], mu, p.sum(1)), (res.spread[:, 0], s, p.sum(0))):
+        cdf = np.cumsum(wt) - 0.5 * wt  # at the grid points (a coarse grid: 0.05 in mu)
+        for a in (0.05, 0.5, 0.95):
+            x = np.interp(a, cdf, grid)
+            density = np.interp(x, grid, wt) / (grid[1] - grid[0])
+            assert abs(np.quantile(draws, a) - x) < 4 * np.sqrt(a * (1 - a) / ess) / density, a
+    for u, m in mom.items():  # sum over (mu, s) of p(mu, s | y) E[theta | mu, s, y_u]
+        mean = np.stack([m1 / np.maximum(m0, 1e-300) for m0, m1 in m], axis=1)
+        d = res.units[:, u, 0]
+        n_eff = float(effective_sample_size(d.reshape(4, -1)))
+        assert abs(d.mean() - np.sum(p * mean)) < 4 * d.std() / np.sqrt(n_eff), u
 
 
 def test_a_far_unit_is_flagged_by_an_exact_refit_and_the_others_are_not():

@@ -163,20 +163,33 @@ def pool(
     if model == "bias-t":
         _say_thermal(pools)
         return
-    for name, p in pools.items():
-        say(f"[{name}] {len(p['units'])} units, converged={p['converged']}")
-        for t in p["terms"]:
-            m, f = p["population"][t]["median"], p["population"][t]["spread"]["factor"]
-            say(f"  {t} population {m['value']:.4g} [{m['low']:.4g}, {m['high']:.4g}] {m['unit']}, "
-                f"units differ by x{f['value']:.3g} [x{f['low']:.3g}, x{f['high']:.3g}]")
-        say("  flagged: " + (", ".join(p["flagged"]) or "none"))
-        for w in p["warnings"]:
-            say(f"  warning: {w}")
+    _say_allan(pools)
     if report is not None:
         from ..report.pool import write_pool_report
 
         write_pool_report(doc, report)
         say(f"wrote {report}")
+
+
+def _say_allan(pools: dict) -> None:
+    for name, p in pools.items():
+        say(f"[{name}] {len(p['units'])} units, converged={p['converged']}")
+        for t in p["terms"]:
+            pop = p["population"][t]
+            m = pop["median"]
+            if not pop["resolved"]:  # an upper bound only (fogbayes.pool.allan.absence_chi2)
+                ev = pop["evidence"]
+                say(f"  {t} population < {m['upper']:.2g} {m['unit']} "
+                    f"({m['level'] * 100:g} %): not resolved, the records do not exclude "
+                    f"{t} = 0 in every unit (chi2 {ev['chi2_absent']:.2g} < "
+                    f"{ev['threshold']:.3g})")
+                continue
+            f = pop["spread"]["factor"]
+            say(f"  {t} population {m['value']:.4g} [{m['low']:.4g}, {m['high']:.4g}] {m['unit']}, "
+                f"units differ by x{f['value']:.3g} [x{f['low']:.3g}, x{f['high']:.3g}]")
+        say("  flagged: " + (", ".join(p["flagged"]) or "none"))
+        for w in p["warnings"]:
+            say(f"  warning: {w}")
 
 
 def _say_thermal(pools: dict) -> None:

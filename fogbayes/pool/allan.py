@@ -8,12 +8,16 @@ goodness of fit fails). The pooled terms (default N, B, K; Q and R on request) a
 modelled as a population (:mod:`fogbayes.pool.normal`): log N, log B, log K of the units
 are normal about a population mean with a between-unit spread. The resolved unpooled terms
 are marginalised (the sub-block of :math:`\Sigma_u`); every unresolved term, pooled or not,
-is conditioned on (:func:`resolved_covariance`). The pool runs twice: the second time
+is conditioned on (:func:`resolved_covariance`). A pooled term the unit does not resolve
+enters with its GLS likelihood normal in its variance coefficient, jointly with the unit's
+other unresolved pooled terms (:func:`censored_covariance`). The pool runs twice: the second time
 each unit's covariance is taken at the first pool's population median instead of at the
 unit's own estimate (:func:`at_population`: at its own estimate a unit's weight follows its
 error, and the population median leaned high).
 
-What it reports, per pooled term (90 % intervals):
+What it reports, per pooled term (90 % intervals), when the population resolves it
+(:func:`absence_chi2`: the units' records together exclude the term being 0 in all of them
+at the single-unit fit's level, chi-square 2.71):
 
 * the population median :math:`e^{\mu}` (the typical unit),
 * the between-unit spread :math:`s` (log sd; ``factor`` :math:`e^{s}`),
@@ -22,15 +26,21 @@ What it reports, per pooled term (90 % intervals):
 * each unit's own (unpooled) estimate and its pooled (shrunk) estimate,
 * each unit's outlier p-value against the population fitted without it, flagged below
   ``flag_level``.
+
+A term the population does not resolve is stated as an upper bound only: ``"resolved":
+false`` and ``"median": {"upper": ..., "level": 0.95}``, the 95 % quantile of the population
+median (no value, interval or spread, which would be the prior's); likewise a new unit's
+range and each unit's pooled value where the unit does not resolve it either.
 """
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from ..allan.fit import GOF_LEVEL, Z90
+from ..allan.fit import CHI2_90, GOF_LEVEL
 from ..allan.model import TERMS, UNITS
 
 SCHEMA = "fogbayes.pool/1"
@@ -106,6 +116,7 @@ def at_population(units: Sequence[UnitFit], terms: Sequence[str], median: dict) 
     their sds had RMS N 0.97, B 1.23, K 0.83 against 0.95, 1.01, 1.04 at their own
     estimates (200 units, ``benchmarks/pool_allan_units.py``; ``benchmarks/RESULTS_pool.md``). Units
     without their fit's data are returned unchanged.
+    Only the terms in ``terms`` (those the population resolves) are moved.
     """
     from ..allan.fit import log_covariance_at
 
@@ -156,6 +167,150 @@ def resolved_covariance(unit: UnitFit) -> np.ndarray:
     return out
 
 
+def profile_gains(unit: UnitFit) -> np.ndarray:
+    """(5,) the chi-square the unit's GLS fit gains by each term, the others refitted
+    (``d_chi2_without`` over the dispersion; 0 where negative: a term the fit does not
+    need), the profile likelihood of the term at 0. Infinite for a term the unit resolves
+    without that record; 0 for an unresolved one."""
+    gain = None if unit.fit is None else unit.fit.info.get("d_chi2_without")
+    if gain is None:
+        return np.array([math.inf if t in unit.terms and unit.terms[t].low > 0 else 0.0
+                         for t in TERMS])
+    disp = float(unit.fit.info.get("dispersion", 1.0))
+    return np.array([max(float(gain[t]), 0.0) / disp if t in gain else 0.0 for t in TERMS])
+
+
+def _plateau_drop(log_s, v_hat, var_v):
+    """x(0)^2 / var_x with x = log(1 + (v - v_hat) / S), var_x = var_v / S^2."""
+    S = np.exp(log_s)
+    return S**2 * np.log1p(-v_hat / S) ** 2 / var_v
+
+
+def censored_covariance(unit: UnitFit) -> tuple[np.ndarray, np.ndarray]:
+    r"""The likelihood the pool gives the terms a unit does not resolve
+    (:func:`fogbayes.pool.normal.unit_log_lik`): (5,) ceilings :math:`c_t` and the (5, 5)
+    covariance of the shifts :math:`x_t = \log(1 + (v_t - \hat v_t) / S_t)`,
+    :math:`v_t = p_t^2`, :math:`S_t = e^{2 c_t}`.
+
+    Near the estimate :math:`x_t \approx (v_t - \hat v_t) / S_t`: normal in :math:`v`, the
+    parameter the AVAR is linear in, so the Gauss-Newton covariance is taken there,
+    :math:`C_v = (J_v^\top V^{-1} J_v)^{-1}`, :math:`J_{v,jt} = \partial
+    \log\sigma^2(\tau_j) / \partial v_t = a_t \tau_j^{n_t} / \sigma^2(\tau_j)`, with the GLS
+    weights at the unit's estimate, over all the terms it fits (a block of it is the
+    marginal of those terms), without the log-space penalty (which only keeps an absent
+    term's log finite), times the fit's dispersion; :math:`C_x = C_v / (S S^\top)`. It keeps
+    the terms' correlation: at 1 h B and K trade off (correlation about -0.75), so the
+    records exclude both being 0 more firmly than either.
+
+    As :math:`v_t \to 0` the likelihood levels off at :math:`x_t(0)^2 / C_{x,tt}`;
+    :math:`S_t` is chosen so that this is the chi-square the unit's fit gains by the term
+    (:func:`profile_gains`, the others refitted), which the linear approximation alone
+    (:math:`\hat v^2 / C_{v,tt}`, the limit :math:`S \to \infty`) understates by up to 1.5 on
+    the 1 h units of benchmarks/RESULTS_pool.md. Far above the estimate :math:`x_t` grows
+    as :math:`\log v_t`, as a log-AVAR residual does: the likelihood falls off as a
+    log-normal, not as a normal in :math:`v`. Where the linear drop already exceeds the
+    profile one, :math:`S_t` is 1000 times the value at which the term alone would make
+    the measured AVAR where it is most visible (``prior_loc``). A unit without its fit's
+    data: ceilings at its upper bounds and its log-space covariance carried to :math:`x`
+    (:math:`dx = 2 (\hat v / S)\, d\log p`)."""
+    from scipy.optimize import brentq
+
+    from ..allan.fit import _A, _POWERS, _gls_weights, _mask, _term_parts
+    from .normal import _MIN_REST
+
+    cov = np.asarray(unit.cov, dtype=float)
+    logp = np.asarray(unit.logp, dtype=float)
+    if unit.data is None or unit.fit is None:
+        ceil = np.array([np.log(unit.terms[t].high) if t in unit.terms else logp[i] + 1.0
+                         for i, t in enumerate(TERMS)])
+        r = 2.0 * np.exp(2.0 * (logp - ceil))
+        return ceil, cov * np.outer(r, r)
+    mask = _mask(unit.terms)
+    on = mask > 0
+    data = unit.data
+    tau = np.asarray(data.tau, dtype=float)
+    _, prec = _gls_weights(logp, mask, data, np.ones(tau.size, bool))
+    total = _term_parts(logp, mask, tau).sum(axis=0)
+    scale = np.exp(2.0 * np.asarray(data.prior_loc, dtype=float))  # columns of order 1
+    J = ((_A * scale)[None, :] * tau[:, None] ** _POWERS[None, :] / total[:, None])[:, on]
+    cov_v = np.zeros((5, 5))
+    cov_v[np.ix_(on, on)] = (np.linalg.pinv(J.T @ prec @ J, hermitian=True)
+                             * float(unit.fit.info["dispersion"])) * np.outer(scale[on], scale[on])
+    v_hat = np.exp(2.0 * logp)
+    gains = profile_gains(unit)
+    log_s = np.log(scale * 1e3)
+    for i in np.flatnonzero(on):
+        var_v = max(cov_v[i, i], 1e-300)
+        lo = np.log(v_hat[i] / (1.0 - _MIN_REST))
+        hi = max(log_s[i], lo + 1.0)
+        target = max(gains[i], 1e-6)
+        if _plateau_drop(hi, v_hat[i], var_v) < target <= _plateau_drop(lo, v_hat[i], var_v):
+            log_s[i] = brentq(lambda q: _plateau_drop(q, v_hat[i], var_v) - target, lo, hi,
+                              xtol=1e-6)
+        else:
+            log_s[i] = hi
+    S = np.exp(log_s)
+    return 0.5 * log_s, cov_v / np.outer(S, S)
+
+
+def absence_chi2(units: Sequence[UnitFit], terms: Sequence[str]) -> dict:
+    r"""Per pooled term, how firmly the units' records together exclude its absence: the
+    likelihood-ratio chi-square of one value :math:`v` common to all units against
+    :math:`v = 0` in all, each unit's profile likelihood normal in :math:`v` about its
+    estimate :math:`\hat v_u` and falling by its fit's gain :math:`g_u` at 0
+    (:func:`profile_gains`: the single-unit test of the term, made across the units),
+
+    .. math:: \chi^2 = \Big(\sum_u g_u / \hat v_u\Big)^2 \Big/ \sum_u g_u / \hat v_u^2 .
+
+    Infinite where a unit resolves the term alone. The population resolves the term when
+    this is at least the 90 % point of :math:`\chi^2_1` (2.71), the single-unit rule (a
+    spread between units would only raise it: the rule errs towards a bound); otherwise the
+    records are compatible with the term being absent in every unit, and the pool states an
+    upper bound only, whatever the prior makes of the region they cannot see."""
+    out = {}
+    for t in terms:
+        i = TERMS.index(t)
+        if any(u.terms[t].low > 0.0 for u in units):
+            out[t] = math.inf
+            continue
+        g = np.array([profile_gains(u)[i] for u in units])
+        v = np.exp(2.0 * np.array([float(u.logp[i]) for u in units]))
+        den = float(np.sum(g / v**2))
+        out[t] = float(np.sum(g / v) ** 2 / den) if den > 0 else 0.0
+    return out
+
+
+#: the level of the upper bound stated for an unresolved term
+UPPER_LEVEL = 0.5 + CI / 2
+
+
+def amplitude_scales(units: Sequence[UnitFit], terms: Sequence[str]) -> np.ndarray:
+    r"""(P,) the scale A of each pooled term's prior, population median ~ HalfCauchy(0, A).
+
+    A noise term is an amplitude (the AVAR holds its square): its prior is put on the
+    amplitude, as for a scale in a hierarchical model (Gelman 2006), not on its log. A
+    log-uniform or wide log-normal prior puts as much mass on each decade far below what
+    the records can see as on the decade the units measure; where the units do not resolve
+    the term the likelihood is level there, and the posterior followed the prior down to
+    :math:`10^{-10}` (four 1 h units: B [7.7e-11, 0.0096] deg/h with truth 0.02). The
+    half-Cauchy is flat below A and falls as :math:`m^{-2}` above. A is the largest over
+    the units of the value at which the term alone would make the unit's measured AVAR
+    where the term is most visible (``prior_loc`` of :mod:`fogbayes.allan.data`): no record
+    holds more of the term, so the prior is about flat over every value the data allow.
+    Units without their fit's data: the largest of their upper bounds."""
+    out = []
+    for t in terms:
+        i = TERMS.index(t)
+        out.append(max(float(np.exp(u.data.prior_loc[i])) if u.data is not None
+                       else u.terms[t].high for u in units))
+    return np.array(out)
+
+
+def _upper(draws_log: np.ndarray, unit: str) -> dict:
+    return {"upper": float(np.exp(np.quantile(draws_log, UPPER_LEVEL))), "level": UPPER_LEVEL,
+            "unit": unit}
+
+
 def _interval(draws_log: np.ndarray, unit: str) -> dict:
     lo, med, hi = np.exp(np.quantile(draws_log, [0.5 - CI / 2, 0.5, 0.5 + CI / 2]))
     return {"value": float(med), "low": float(lo), "high": float(hi), "unit": unit}
@@ -176,9 +331,9 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
         missing = [u.name for u in units if u.terms[t].low <= 0.0]
         if missing:
             out.append(f"{t} is not resolved in {len(missing)} of {len(units)} units "
-                       f"({', '.join(missing)}: their 90 % intervals reach 0): they enter as "
-                       f"upper limits (flat-below likelihood), which the population's {t} "
-                       f"rests on less; record longer to resolve it")
+                       f"({', '.join(missing)}: their 90 % intervals reach 0): they enter "
+                       f"with a likelihood that stays level towards {t} = 0, which the "
+                       f"population's {t} rests on less; record longer to resolve it")
     failed = [u.name for u in units if not u.converged]
     if failed:
         out.append(f"the single-unit fit did not converge for {', '.join(failed)}")
@@ -223,9 +378,13 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
     first = None
     if covariance_at == "population" and any(u.data is not None for u in units):
         first, _ = _pool(units, terms, seed, flag_level, prior, sampler, outliers=False)
-        median = {t: float(np.exp(np.median(first.mu[:, j]))) for j, t in enumerate(terms)}
+        # only where the population resolves a term is its median a better place than the
+        # unit's own estimate
+        absence = absence_chi2(units, terms)
+        median = {t: float(np.exp(np.median(first.mu[:, j]))) for j, t in enumerate(terms)
+                  if absence[t] >= CHI2_90}
         own = _covariances(units, terms)
-        units = at_population(units, terms, median)
+        units = at_population(units, tuple(median), median)
         res, sheet = _pool(units, terms, seed, flag_level, prior, sampler, unit_cov=own)
     else:
         res, sheet = _pool(units, terms, seed, flag_level, prior, sampler)
@@ -251,40 +410,64 @@ def _pool(units, terms, seed, flag_level, prior, sampler, outliers=True, unit_co
     idx = [TERMS.index(t) for t in terms]
     y = np.stack([u.logp[idx] for u in units])
     cov = _covariances(units, terms)
-    # a term a unit does not resolve is an upper limit: flat below its estimate, falling
-    # off above it over the width of its interval's upper side (fogbayes.pool.normal)
+    # a term a unit does not resolve: its likelihood is level towards 0 and log-quadratic
+    # above, through the variance coefficient p^2 the AVAR is linear in (fogbayes.pool.normal)
     cens = np.array([[u.terms[t].low <= 0.0 for t in terms] for u in units], dtype=float)
+    ceiling = y + 1.0
     for i, u in enumerate(units):
-        for j, t in enumerate(terms):
-            if cens[i, j]:
-                e = u.terms[t]
-                cov[i, j, j] = max(np.log(e.high / e.value) / Z90, 0.05) ** 2
+        c = np.flatnonzero(cens[i])
+        if c.size:
+            ceil, cx = censored_covariance(u)
+            ceiling[i] = ceil[idx]
+            cov[i][np.ix_(c, c)] = cx[np.ix_(np.array(idx)[c], np.array(idx)[c])]
+    scale = amplitude_scales(units, terms)
     mu_prior, sheet = None, {}
     if prior is not None:
         sheet = {t: prior.terms[t] for t in terms if t in prior.terms}
         mu_prior = (np.array([np.log(sheet[t].value) if t in sheet else np.median(y[:, j])
                               for j, t in enumerate(terms)]),
                     np.array([sheet[t].sd_log if t in sheet else MU_PRIOR_SD for t in terms]))
-    res = fit_pool(y, cov, terms, censored=cens, seed=seed, flag_level=flag_level,
-                   mu_prior=mu_prior, outliers=outliers, unit_cov=unit_cov, **sampler)
+        for j, t in enumerate(terms):  # the sheet's terms take its log-normal prior
+            if t in sheet:
+                scale[j] = np.nan
+    res = fit_pool(y, cov, terms, censored=cens, ceiling=ceiling, seed=seed,
+                   flag_level=flag_level,
+                   mu_prior=mu_prior, amplitude_scale=scale, outliers=outliers,
+                   unit_cov=unit_cov, **sampler)
     return res, sheet
 
 
 def _document(units, terms, res, sheet, prior, flag_level, first_mu) -> dict:
     population = {}
+    absence = absence_chi2(units, terms)
+    seen = {}
     for j, t in enumerate(terms):
+        seen[t] = absence[t] >= CHI2_90
+        # JSON has no infinity: a term some unit resolves alone has no such chi-square
+        evidence = {"chi2_absent": absence[t] if math.isfinite(absence[t]) else None,
+                    "threshold": CHI2_90}
+        if not seen[t]:  # an upper bound only: no median, spread or range to state
+            population[t] = {"resolved": False, "median": _upper(res.mu[:, j], UNITS[t]),
+                             "spread": None, "new_unit": _upper(res.new_unit[:, j], UNITS[t]),
+                             "evidence": evidence}
+            continue
         lo, hi = np.exp(np.quantile(res.new_unit[:, j], [0.5 - CI / 2, 0.5 + CI / 2]))
-        population[t] = {"median": _interval(res.mu[:, j], UNITS[t]),
+        population[t] = {"resolved": True, "median": _interval(res.mu[:, j], UNITS[t]),
                          "spread": _spread(res.spread[:, j]),
-                         "new_unit": {"low": float(lo), "high": float(hi), "unit": UNITS[t]}}
+                         "new_unit": {"low": float(lo), "high": float(hi), "unit": UNITS[t]},
+                         "evidence": evidence}
     rows = []
     for i, u in enumerate(units):
         per = {}
         for j, t in enumerate(terms):
             e = u.terms[t]
+            alone = bool(e.low > 0)
+            # a unit's pooled term is an interval where it or the population resolves it
+            pooled = (_interval(res.units[:, i, j], UNITS[t]) if alone or seen[t]
+                      else _upper(res.units[:, i, j], UNITS[t]))
             per[t] = {"single": {"value": e.value, "low": e.low, "high": e.high,
-                                 "unit": e.unit, "resolved": bool(e.low > 0)},
-                      "pooled": _interval(res.units[:, i, j], UNITS[t])}
+                                 "unit": e.unit, "resolved": alone},
+                      "pooled": {**pooled, "resolved": alone or seen[t]}}
         p = float(res.outlier_p[i])
         rows.append({"name": u.name, "source": u.source, "n": u.n, "fs": u.fs,
                      "taus_left_out": u.taus_left_out, "gof_p": u.gof_p,
@@ -297,7 +480,7 @@ def _document(units, terms, res, sheet, prior, flag_level, first_mu) -> dict:
         "each unit's own estimate"
     if reevaluated:
         diag["first_pool_median"] = {t: float(np.exp(np.median(first_mu[:, j])))
-                                     for j, t in enumerate(terms)}
+                                     for j, t in enumerate(terms) if seen[t]}
     flagged = [r["name"] for r in rows if r["outlier"]["flagged"]]
     return {"terms": list(terms), "ci": CI, "flag_level": flag_level,
             "population": population, "units": rows, "flagged": flagged,
@@ -306,13 +489,23 @@ def _document(units, terms, res, sheet, prior, flag_level, first_mu) -> dict:
             "prior": None if prior is None else {
                 **prior.record(), "rule": "log mu ~ N(log value, (ln looseness / 1.645)^2) "
                 "for the population median of " + (", ".join(sheet) or "no pooled term")
-                + "; the other pooled terms keep N(median of the units, 10^2)"},
+                + "; the other pooled terms keep HalfCauchy(0, A) (population_prior)"},
+            "population_prior": "each population median ~ HalfCauchy(0, A), A the largest "
+                                "value of the term a unit's measured AVAR can hold"
+                                + (" (the datasheet's terms: its log-normal)"
+                                   if prior is not None else "")
+                                + "; between-unit log sd ~ HalfNormal(1)",
             "method": "hierarchical normal model of the units' log-space GLS estimates "
-                      "(fogbayes.pool.normal): NUTS on the population mean and spread, unit "
-                      "parameters integrated out exactly and drawn given each posterior draw; "
-                      "outliers by the leave-one-out posterior-predictive p-value of each "
-                      "pooled term (two-sided; the smallest times their number), or of all "
-                      "jointly (diagnostics.outlier_test)"}
+                      "(fogbayes.pool.normal): NUTS on the population mean and spread, the "
+                      "resolved unit parameters integrated out exactly and drawn given each "
+                      "posterior draw; a term a unit does not resolve enters with its GLS "
+                      "likelihood normal in the variance coefficient (the term squared), "
+                      "jointly with its other unresolved terms, and is sampled; a term whose "
+                      "absence in every unit the records do not exclude (evidence.chi2_absent "
+                      "< 2.71) is stated as an upper bound only (resolved: false); outliers by "
+                      "the leave-one-out posterior-predictive p-value of each pooled term "
+                      "(two-sided; the smallest times their number), or of all jointly "
+                      "(diagnostics.outlier_test)"}
 
 
 def pool_document(pools: dict[str, dict], *, model: str = "allan") -> dict:

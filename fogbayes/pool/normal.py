@@ -14,20 +14,28 @@ Each unit :math:`u = 1..U` (a sensor, or one run of a sensor) gives an estimate
 
 with :math:`\tilde y_p` the median of the units' estimates (the prior only fixes the scale:
 10 in log space is a factor :math:`e^{10}`; a spread of 1 in log space is a factor 2.7
-between units, so HalfNormal(1) admits anything a fleet of one type shows). A datasheet
+between units, so HalfNormal(1) admits anything a fleet of one type shows). Where the
+components are log amplitudes (Allan terms) that the units may not resolve,
+``amplitude_scale`` puts the prior on the amplitude instead,
+:math:`e^{\mu_p} \sim \mathrm{HalfCauchy}(0, A_p)` (:func:`amplitude_log_prior`;
+:func:`fogbayes.pool.allan.amplitude_scales`): the normal prior in log space has as much mass
+in each decade far below what the records can see as in the decades they measure, and where
+the likelihood is level there the posterior follows it down. A datasheet
 says where the typical unit lies: with ``mu_prior = (m, sd)`` the prior of :math:`\mu_p` is
 :math:`\mathcal N(m_p, sd_p^2)` instead (:mod:`fogbayes.inference.datasheet`: :math:`m_p`
 the log of the sheet value, :math:`sd_p = \ln L_p / 1.645` for looseness :math:`L_p`). The unit
 parameters integrate out exactly, :math:`y_u \sim \mathcal N(\mu, S + \Sigma_u)`, so NUTS
-samples only :math:`(\mu, \log s)`: :math:`2P` dimensions and no funnel between a unit and
-the spread. Given a draw of :math:`(\mu, S)` each unit's parameters are normal,
+samples :math:`(\mu, \log s)` and no funnel between a unit and the spread forms (the
+components a unit does not resolve are sampled too, non-centred: below). Given a draw of
+:math:`(\mu, S)` each unit's parameters are normal,
 
 .. math::
 
     \theta_u \mid y, \mu, S \sim \mathcal N\big(\mu + S (S + \Sigma_u)^{-1} (y_u - \mu),\;
         S - S (S + \Sigma_u)^{-1} S\big),
 
-drawn once per posterior draw (the shrunk per-unit posteriors). A new unit of the
+drawn once per posterior draw (the shrunk per-unit posteriors; a censored component's
+draws are the sampler's). A new unit of the
 population is :math:`\mathcal N(\mu, S)` (the population's predictive range).
 
 Outliers: unit :math:`u` is judged against the population fitted *without* it (the same
@@ -56,22 +64,31 @@ little (a shifted thermal curve), and stays the default.
 The normal likelihood of :math:`y_u` is the approximation this module makes: the GLS
 estimates of well-resolved Allan terms are close to normal in log space (their 90 %
 intervals cover 85-95 %, benchmarks/RESULTS_allan.md). A term a unit does not resolve (its
-interval reaches 0) is not: its likelihood is flat towards 0 and falls off above. Such a
-*censored* component :math:`t` of unit :math:`u` gets the flat-below likelihood
+interval reaches 0) is not: the Allan variance is linear in the variance coefficient
+:math:`v = e^{2\theta}` (:math:`v = B^2`, :math:`K^2`, ...), and its GLS likelihood is close
+to normal in :math:`v`, not in :math:`\theta`: as :math:`\theta \to -\infty` it levels off at
+:math:`\exp(-\hat v^2 / 2\sigma_v^2)` of its peak (about the chi-square the unit's fit gains
+by the term), where a log-normal likelihood falls to 0. A unit's *censored* components
+:math:`c` therefore get the likelihood of the same Gauss-Newton approximation made in
+:math:`v`, jointly (at 1 h B and K trade off, correlation about -0.75: the records exclude
+both being 0 more firmly than either),
 
 .. math::
 
-    L_{ut}(\theta) = 1 \ (\theta \le y_{ut}), \qquad
-    \exp\!\big(-(\theta - y_{ut})^2 / (2\sigma_{ut}^2)\big) \ (\theta > y_{ut}),
+    L_{uc}(\theta_c) = \exp\!\big(-\tfrac12\, x^\top (4\Sigma_{u,cc})^{-1} x\big), \qquad
+    x_t = e^{2(\theta_t - y_{ut})} - 1 = (v_t - \hat v_t) / \hat v_t,
 
-with :math:`y_{ut}` the unit's estimate and :math:`\sigma_{ut}` the width of its interval's
-upper side, independent of its other components; its integral against
-:math:`\mathcal N(\mu_t, s_t^2)` is closed-form (:func:`_censored_log_lik`). Treating such a
-unit as a normal measurement at its (low, arbitrary) estimate put the population K 8 % high
-with 73 % coverage on simulated fleets (benchmarks/RESULTS_pool.md; 80 % with this
-likelihood). The width sigma comes from the interval's upper end, which may be the fit's
-99.9 % cap (:func:`fogbayes.allan.fit.upper_caps`): the limit is then a little
-tighter than a 95 % one.
+(:func:`unit_log_lik`, :func:`censored_log_lik` for one component; ``cov[u]``'s censored block
+holds :math:`\Sigma_{u,cc}`, a quarter of the covariance of :math:`x`, which is the log-space
+covariance this likelihood has at its peak; :func:`fogbayes.pool.allan.censored_covariance`),
+independent of the unit's resolved components. It has no closed-form integral against
+:math:`\mathcal N(\mu_t, s_t^2)`, so each censored component's parameter is sampled with the
+population, non-centred (:math:`\theta_{ut} = \mu_t + s_t z_{ut}`,
+:math:`z_{ut} \sim \mathcal N(0, 1)`; the resolved components stay integrated out). The
+flat-below likelihood this replaces (:math:`L = 1` below the unit's estimate, each term
+alone: a term at 0 as likely as at its estimate), with a normal prior on :math:`\mu` of sd
+10, let the population median of B and K of four simulated 1 h units run to
+:math:`10^{-10}` (benchmarks/RESULTS_pool.md).
 """
 
 from __future__ import annotations
@@ -105,61 +122,97 @@ class PoolResult(NamedTuple):
     diagnostics: dict       # r_hat, ess, divergences, converged
 
 
-def _censored_log_lik(y, sig2, mu, s):
-    """log of the integral of L(theta) N(theta; mu, s^2) over theta, for the flat-below
-    likelihood L = 1 for theta <= y and exp(-(theta - y)^2 / (2 sig2)) above:
-
-        Phi((y - mu) / s) + sqrt(sig2 / (sig2 + s^2)) exp(-(y - mu)^2 / (2 (sig2 + s^2)))
-                             Phi((mu - y) sqrt(sig2) / (s sqrt(sig2 + s^2)))
-    """
-    from jax.scipy.special import log_ndtr
-
-    tot = sig2 + s**2
-    below = log_ndtr((y - mu) / s)
-    above = (0.5 * jnp.log(sig2 / tot) - 0.5 * (y - mu) ** 2 / tot
-             + log_ndtr((mu - y) * jnp.sqrt(sig2) / (s * jnp.sqrt(tot))))
-    return jnp.logaddexp(below, above)
+#: the variance coefficient is exp(LINEAR_POWER * theta): Allan terms enter the AVAR squared
+LINEAR_POWER = 2.0
+#: exponent cap of the censored likelihood: beyond it the likelihood is below exp(-1e3)
+_MAX_EXPONENT = 60.0
+#: least share of the ceiling left to the other terms (v_hat <= (1 - this) S)
+_MIN_REST = 1e-3
 
 
-def unit_log_lik(yu, cu, cens, mu, s):
-    """log p(y_u | mu, s), the unit's parameters integrated out: its resolved components
-    N(y_r; mu_r, Sigma_rr + S_rr), times each censored component's flat-below likelihood
-    (:func:`_censored_log_lik`; a censored component has no covariance with the others)."""
+def censored_shift(theta, y, ceiling):
+    """x = log((v - v_hat + S) / S) of a censored component, v = exp(2 theta),
+    v_hat = exp(2 y), S = exp(2 ceiling) >= v_hat / (1 - _MIN_REST) (module docstring)."""
+    a = jnp.minimum(LINEAR_POWER * (theta - ceiling), _MAX_EXPONENT)
+    b = LINEAR_POWER * (y - ceiling)
+    log_rest = jnp.log1p(-jnp.exp(b))  # log(1 - v_hat / S): the other terms' share
+    return jnp.logaddexp(a, log_rest) - jnp.logaddexp(b, log_rest)
+
+
+def censored_log_lik(theta, y, var, ceiling):
+    """log L(theta) of one censored component: -x^2 / (2 var), x = :func:`censored_shift`;
+    0 at y, level -log(1 - v_hat / S)^2 / (2 var) as theta -> -inf, log-quadratic above."""
+    return -censored_shift(theta, y, ceiling) ** 2 / (2.0 * var)
+
+
+def unit_log_lik(yu, cu, cens, mu, s, theta, ceil):
+    """log p(y_u | mu, s, theta_u): the unit's resolved components integrated out,
+    N(y_r; mu_r, Sigma_rr + S_rr), times its censored components' joint likelihood at their
+    sampled parameters ``theta``: normal in x = :func:`censored_shift` with covariance
+    Sigma_cc (``cu``'s censored block; ``ceil`` the ceilings; no covariance between the
+    censored and the resolved components; ``theta`` of resolved components is ignored)."""
     r = 1.0 - cens
     A = (cu + jnp.diag(s**2)) * jnp.outer(r, r) + jnp.diag(cens)
     L = jnp.linalg.cholesky(A)
     z = jax.scipy.linalg.solve_triangular(L, (yu - mu) * r, lower=True)
     gauss = (-0.5 * z @ z - jnp.sum(jnp.log(jnp.diag(L)))
              - 0.5 * jnp.sum(r) * jnp.log(2 * jnp.pi))
-    return gauss + jnp.sum(cens * _censored_log_lik(yu, jnp.diag(cu), mu, s))
+    Lc = jnp.linalg.cholesky(cu * jnp.outer(cens, cens) + jnp.diag(r))
+    x = jnp.where(cens > 0, censored_shift(theta, yu, jnp.where(cens > 0, ceil, yu + 1.0)), 0.0)
+    zc = jax.scipy.linalg.solve_triangular(Lc, x, lower=True)
+    return gauss - 0.5 * zc @ zc
 
 
-def _log_marginal(y, cov, cens, w, mu, s):
-    """sum_u w_u log p(y_u | mu, s)."""
-    return jnp.sum(w * jax.vmap(unit_log_lik, in_axes=(0, 0, 0, None, None))(y, cov, cens, mu, s))
+def _log_marginal(y, cov, cens, ceil, w, mu, s, theta):
+    """sum_u w_u log p(y_u | mu, s, theta_u)."""
+    return jnp.sum(w * jax.vmap(unit_log_lik, in_axes=(0, 0, 0, None, None, 0, 0))(
+        y, cov, cens, mu, s, theta, ceil))
 
 
-def _potential(y, cov, cens, w, centre, mu_sd):
+def amplitude_log_prior(mu, log_scale):
+    """log density of mu = log m under m ~ HalfCauchy(0, A), log A = ``log_scale``:
+    log(2 / pi) + (mu - log A) - log(1 + (m / A)^2) (the Jacobian dm/dmu = m included)."""
+    x = mu - log_scale
+    return jnp.log(2.0 / jnp.pi) + x - jnp.logaddexp(0.0, 2.0 * x)
+
+
+def _potential(y, cov, cens, ceil, w, centre, mu_sd, log_scale):
     from jax.scipy.stats import norm
+
+    amplitude = jnp.isfinite(log_scale)
+    log_scale = jnp.where(amplitude, log_scale, 0.0)  # no NaN in the branch not taken
 
     def potential(z):
         mu, log_s = z["mu"], z["log_s"]
         s = jnp.exp(log_s)
-        lp = jnp.sum(norm.logpdf(mu, centre, mu_sd))
+        lp = jnp.sum(jnp.where(amplitude, amplitude_log_prior(mu, log_scale),
+                               norm.logpdf(mu, centre, mu_sd)))
         # HalfNormal(1) on s, sampled as log s (+ the Jacobian log s)
         lp += jnp.sum(norm.logpdf(s, 0.0, SPREAD_PRIOR_SD) + jnp.log(2.0) + log_s)
-        return -(lp + _log_marginal(y, cov, cens, w, mu, s))
+        # censored components, non-centred: theta = mu + s z, z ~ N(0, 1) (z of the resolved
+        # components is a free standard normal the likelihood does not see)
+        lp += jnp.sum(norm.logpdf(z["z"]))
+        theta = mu + s * z["z"]
+        return -(lp + _log_marginal(y, cov, cens, ceil, w, mu, s, theta))
 
     return potential
 
 
+#: NUTS target acceptance and least warm-up: resolved components only, and with censored
+#: components sampled (their likelihood is level below and steep near the estimate: at 0.98
+#: and 500 warm-up the four 1 h units of benchmarks/RESULTS_pool.md gave R-hat 1.011 or a
+#: divergence; at 0.995 and 1000 neither, on sampler seeds 0, 2 and 3)
+TARGET_ACCEPT, TARGET_ACCEPT_CENSORED, WARMUP_CENSORED = 0.98, 0.995, 1000
+
+
 @functools.lru_cache(maxsize=8)
-def _sampler(num_warmup: int, num_samples: int):
-    """NUTS chains over (mu, log s) (:mod:`fogbayes.inference.nuts`); the unit weights are an
-    argument, so the full fit and every leave-one-out refit share one compilation per (U, P)."""
+def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
+    """NUTS chains over (mu, log s, z) (:mod:`fogbayes.inference.nuts`); the unit weights are
+    an argument, so the full fit and every leave-one-out refit share one compilation per
+    (U, P)."""
     from ..inference.nuts import chain_sampler
 
-    return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=0.98)
+    return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=target)
 
 
 def _start(y, cov, num_chains, rng):
@@ -168,7 +221,8 @@ def _start(y, cov, num_chains, rng):
     spread = np.maximum(np.std(y, axis=0), 0.05)
     mu0 = centre + 0.1 * spread * rng.standard_normal((num_chains, y.shape[1]))
     ls0 = np.log(spread) + 0.1 * rng.standard_normal((num_chains, y.shape[1]))
-    return centre, {"mu": jnp.asarray(mu0), "log_s": jnp.asarray(ls0)}
+    z0 = 0.1 * rng.standard_normal((num_chains,) + y.shape)
+    return centre, {"mu": jnp.asarray(mu0), "log_s": jnp.asarray(ls0), "z": jnp.asarray(z0)}
 
 
 def _summary(zs, div) -> dict:
@@ -182,15 +236,17 @@ def _summary(zs, div) -> dict:
             "converged": converged(r_hat, ess, divergences, floor=ESS_MIN)}
 
 
-def shrink(y, cov, mu, spread, rng, cens=None) -> np.ndarray:
+def shrink(y, cov, mu, spread, rng, cens=None, theta=None) -> np.ndarray:
     """Draws of each unit's parameters given population draws (see the module docstring).
 
     ``y`` (U, P), ``cov`` (U, P, P), ``mu``/``spread`` (D, P) -> (D, U, P). A censored
-    component (``cens``) is independent of the others: drawn from N(mu_t, s_t^2) and kept
-    with probability L(theta) (the flat-below likelihood; rejection sampling, 64 proposals,
-    the likeliest kept if none is accepted)."""
+    component (``cens``) is independent of the resolved ones and is not normal given
+    (mu, S): its draws are ``theta`` (D, U, P), the sampler's draws of it (required when
+    any component is censored)."""
     U, P = y.shape
     cens = np.zeros((U, P)) if cens is None else np.asarray(cens, dtype=float)
+    if cens.any() and theta is None:
+        raise ValueError("censored components are drawn by the sampler: pass its theta")
     r = 1.0 - cens
     cov_r = cov * r[:, :, None] * r[:, None, :] + np.eye(P) * (cens * 1e30)[:, None, :]
     S = spread[:, None, :, None] * np.eye(P) * spread[:, None, None, :]  # (D,1,P,P)
@@ -201,36 +257,40 @@ def shrink(y, cov, mu, spread, rng, cens=None) -> np.ndarray:
     var = 0.5 * (var + np.swapaxes(var, -1, -2)) + 1e-15 * np.eye(P)
     L = np.linalg.cholesky(var)
     out = mean + np.einsum("duij,duj->dui", L, rng.standard_normal(mean.shape))
-    for u, t in zip(*np.nonzero(cens)):
-        D = mu.shape[0]
-        prop = mu[:, t, None] + spread[:, t, None] * rng.standard_normal((D, 64))
-        lik = np.exp(-0.5 * np.clip(prop - y[u, t], 0, None) ** 2 / cov[u, t, t])
-        ok = rng.random((D, 64)) < lik
-        pick = np.where(ok.any(axis=1), ok.argmax(axis=1), lik.argmax(axis=1))
-        out[:, u, t] = prop[np.arange(D), pick]
-    return out
+    return np.where(cens[None] > 0, theta if theta is not None else out, out)
 
 
-def _run(y, cov, cens, w, centre, mu_sd, z0, key, num_warmup, num_samples, num_chains):
-    """One posterior of (mu, s) with unit weights ``w``: draws (D, P) twice, diagnostics."""
+def _run(y, cov, cens, ceil, w, centre, mu_sd, log_scale, z0, key, num_warmup, num_samples,
+         num_chains):
+    """One posterior of (mu, s) with unit weights ``w``: draws (D, P) twice, diagnostics,
+    and the draws (D, U, P) of the units' parameters (meaningful for censored components)."""
     keys = jax.random.split(key, num_chains)
-    zs, div = _sampler(num_warmup, num_samples)(keys, z0, jnp.asarray(y), jnp.asarray(cov),
-                                               jnp.asarray(cens), jnp.asarray(w),
-                                               jnp.asarray(centre), jnp.asarray(mu_sd))
+    target = TARGET_ACCEPT
+    if np.any(cens):
+        target, num_warmup = TARGET_ACCEPT_CENSORED, max(num_warmup, WARMUP_CENSORED)
+    zs, div = _sampler(num_warmup, num_samples, target)(keys, z0, jnp.asarray(y), jnp.asarray(cov),
+                                               jnp.asarray(cens), jnp.asarray(ceil),
+                                               jnp.asarray(w),
+                                               jnp.asarray(centre), jnp.asarray(mu_sd),
+                                               jnp.asarray(log_scale))
     zs = {k: np.asarray(v) for k, v in zs.items()}
-    P = y.shape[1]
-    return zs["mu"].reshape(-1, P), np.exp(zs["log_s"]).reshape(-1, P), _summary(zs, div)
+    U, P = y.shape
+    mu, spread = zs["mu"].reshape(-1, P), np.exp(zs["log_s"]).reshape(-1, P)
+    theta = mu[:, None, :] + spread[:, None, :] * zs["z"].reshape(-1, U, P)
+    return mu, spread, _summary(zs, div), theta
 
 
-def _log_lik_table(y, cov, cens, mu, spread) -> np.ndarray:
-    """log p(y_u | mu_d, s_d) for every draw d and unit u: (D, U)."""
+def _log_lik_table(y, cov, cens, ceil, mu, spread, theta) -> np.ndarray:
+    """log p(y_u | mu_d, s_d, theta_ud) for every draw d and unit u: (D, U)."""
     return np.asarray(_unit_log_lik_draws(jnp.asarray(y), jnp.asarray(cov), jnp.asarray(cens),
-                                          jnp.asarray(mu), jnp.asarray(spread)))
+                                          jnp.asarray(mu), jnp.asarray(spread),
+                                          jnp.asarray(theta), jnp.asarray(ceil)))
 
 
 #: :func:`unit_log_lik` over units (inner) and draws (outer), compiled once per shape
-_unit_log_lik_draws = program(jax.vmap(jax.vmap(unit_log_lik, in_axes=(0, 0, 0, None, None)),
-                                       in_axes=(None, None, None, 0, 0)))
+_unit_log_lik_draws = program(jax.vmap(jax.vmap(unit_log_lik,
+                                                in_axes=(0, 0, 0, None, None, 0, 0)),
+                                       in_axes=(None, None, None, 0, 0, 0, None)))
 
 
 def _predictive_p(yu, cu, cens, mu, spread, log_w=None, test: str = "joint") -> float:
@@ -264,15 +324,21 @@ PARETO_K_MAX = 0.7
 REFIT_FACTOR = 10.0
 
 
-def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float = 0.01,
-             mu_prior=None, outliers: bool = True, outlier_test: str = "joint", unit_cov=None,
+def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
+             flag_level: float = 0.01, mu_prior=None, amplitude_scale=None, outliers: bool = True,
+             outlier_test: str = "joint", unit_cov=None,
              num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 4) -> PoolResult:
     """Posterior of the population model (module docstring) from estimates ``y`` (U, P) with
     covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
-    ``censored`` (U, P) marks components a unit does not resolve: y is then its estimate
-    and cov[t, t] the squared log-space width of its upper side (the flat-below likelihood,
-    module docstring); their covariances with other components are ignored.
+    ``censored`` (U, P) marks components a unit does not resolve: y is then its estimate,
+    ``ceiling`` (U, P) the log of the value at which the term alone is the unit's measured
+    AVAR (required with ``censored``; raised to keep a 0.1 % share for the other terms) and
+    cov's block of them the covariance of their shifts x (:func:`censored_shift`, module
+    docstring); their covariances with resolved components are ignored.
     ``mu_prior``: ``(mean (P,), sd (P,))`` of the normal prior on mu (a datasheet), or None.
+    ``amplitude_scale`` (P,): where finite, the prior of that component is
+    e^mu ~ HalfCauchy(0, amplitude_scale) instead (:func:`amplitude_log_prior`; the
+    components are log amplitudes, module docstring).
     ``outliers=False`` skips the leave-one-out p-values (NaN). ``outlier_test``: ``"joint"``
     (chi-square of all resolved components) or ``"each"`` (each component alone; module
     docstring). ``unit_cov`` (U, P, P): the covariance of each unit's resolved components
@@ -299,27 +365,42 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
                             fix="pool two or more runs or units")
     cens = np.zeros((U, P)) if censored is None else np.asarray(censored, dtype=float)
     r = 1.0 - cens
-    cov = cov * r[:, :, None] * r[:, None, :] + np.eye(P) * (cens * np.diagonal(cov, axis1=1, axis2=2))[:, None, :]
+    # no covariance between a unit's resolved and censored components
+    both = r[:, :, None] * r[:, None, :] + cens[:, :, None] * cens[:, None, :]
+    cov = cov * both
     ucov = cov if unit_cov is None else (
         np.asarray(unit_cov, dtype=float) * r[:, :, None] * r[:, None, :]
-        + np.eye(P) * (cens * np.diagonal(cov, axis1=1, axis2=2))[:, None, :])
+        + cov * cens[:, :, None] * cens[:, None, :])
+    if cens.any() and ceiling is None:
+        raise ValueError("censored components need their ceiling")
+    ceil = y + 1.0 if ceiling is None else np.maximum(
+        np.asarray(ceiling, dtype=float), y - 0.5 * np.log1p(-_MIN_REST))
+    # the outlier test takes a censored component's log-space variance at its peak:
+    # dx/dtheta = 2 v_hat / S there
+    tcov = ucov.copy()
+    for u, t in zip(*np.nonzero(cens)):
+        tcov[u, t, t] = cov[u, t, t] / (2.0 * np.exp(2.0 * (y[u, t] - ceil[u, t]))) ** 2
     rng = np.random.default_rng(seed)
     centre, z0 = _start(y, cov, num_chains, rng)
     mu_sd = np.full(P, MU_PRIOR_SD)
     if mu_prior is not None:  # a datasheet: the typical unit's value and how loosely known
         centre, mu_sd = (np.asarray(a, dtype=float) for a in mu_prior)
+    log_scale = np.full(P, np.nan) if amplitude_scale is None else np.log(
+        np.asarray(amplitude_scale, dtype=float))
     key = jax.random.PRNGKey(seed)
-    run = functools.partial(_run, y, cov, cens, centre=centre, mu_sd=mu_sd, z0=z0,
+    run = functools.partial(_run, y, cov, cens, ceil, centre=centre, mu_sd=mu_sd,
+                            log_scale=log_scale, z0=z0,
                             num_warmup=num_warmup,
                             num_samples=num_samples, num_chains=num_chains)
-    mu, spread, diagnostics = run(np.ones(U), key=key)
+    mu, spread, diagnostics, theta = run(np.ones(U), key=key)
     if not outliers:
         diagnostics.update(pareto_k=[], loo_method=["none"] * U, refits=0, refits_converged=0)
-        units = shrink(y, ucov, mu, spread, rng, cens)
+        units = shrink(y, ucov, mu, spread, rng, cens, theta)
         new_unit = mu + spread * rng.standard_normal(mu.shape)
         return PoolResult(tuple(names), mu, spread, units, new_unit, np.full(U, np.nan),
                           diagnostics)
-    ll = _log_lik_table(y, cov, cens, mu, spread)
+    # leave-one-out on the joint posterior of (mu, s, theta): the ratio 1 / p(y_u | ...)
+    ll = _log_lik_table(y, cov, cens, ceil, mu, spread, theta)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # ArviZ warns on k > 0.7: handled by refitting
         log_w, k_hat = az.psislw(-ll.T)  # (U, D) log ratios 1 / p(y_u | draw)
@@ -327,12 +408,12 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
     outlier_p, method = np.empty(U), []
     refits = []
     for u in range(U):
-        p = _predictive_p(y[u], ucov[u], cens[u], mu, spread, log_w[u], outlier_test)
+        p = _predictive_p(y[u], tcov[u], cens[u], mu, spread, log_w[u], outlier_test)
         if k_hat[u] > PARETO_K_MAX or p < REFIT_FACTOR * flag_level:
             w = np.ones(U)
             w[u] = 0.0
-            mu_u, s_u, diag_u = run(w, key=jax.random.fold_in(key, u + 1))
-            p = _predictive_p(y[u], ucov[u], cens[u], mu_u, s_u, test=outlier_test)
+            mu_u, s_u, diag_u, _ = run(w, key=jax.random.fold_in(key, u + 1))
+            p = _predictive_p(y[u], tcov[u], cens[u], mu_u, s_u, test=outlier_test)
             refits.append(diag_u["converged"])
             method.append("refit")
         else:
@@ -340,6 +421,6 @@ def fit_pool(y, cov, names, *, censored=None, seed: int = 0, flag_level: float =
         outlier_p[u] = p
     diagnostics.update(pareto_k=k_hat.tolist(), loo_method=method, refits=len(refits),
                        refits_converged=int(sum(refits)))
-    units = shrink(y, ucov, mu, spread, rng, cens)
+    units = shrink(y, ucov, mu, spread, rng, cens, theta)
     new_unit = mu + spread * rng.standard_normal(mu.shape)
     return PoolResult(tuple(names), mu, spread, units, new_unit, outlier_p, diagnostics)

@@ -8,10 +8,22 @@ from .html import Section, fmt, figure_html, write
 from .labels import interval_text, unit_text
 
 
+def bound_text(b: dict) -> str:
+    """An upper bound as the reports show it: ``< 0.026 (95 %)``."""
+    return f"< {fmt(b['upper'], sig=2)} ({b['level'] * 100:g} %)"
+
+
 def _population_rows(pool: dict) -> list[list]:
     rows = []
     for t in pool["terms"]:
         p = pool["population"][t]
+        if not p.get("resolved", True):  # an upper bound only: no median, interval, spread
+            ev = p["evidence"]
+            rows.append([t, unit_text(p["median"]["unit"]), bound_text(p["median"]),
+                         f"not resolved: the records do not exclude {t} = 0 in every unit "
+                         f"(χ² {fmt(ev['chi2_absent'], sig=2)} < {fmt(ev['threshold'], sig=3)})",
+                         "—", "—", bound_text(p["new_unit"])])
+            continue
         med, f, new = p["median"], p["spread"]["factor"], p["new_unit"]
         rows.append([t, unit_text(med["unit"]), fmt(med["value"]),
                      interval_text(med["low"], med["high"]),
@@ -26,9 +38,12 @@ def _unit_rows(pool: dict) -> list[list]:
         row = [u["name"]]
         for t in pool["terms"]:
             s, p = u["terms"][t]["single"], u["terms"][t]["pooled"]
-            alone = (f"{fmt(s['value'])} {interval_text(s['low'], s['high'])}"
-                     + ("" if s["resolved"] else " (upper bound)"))
-            row += [alone, f"{fmt(p['value'])} {interval_text(p['low'], p['high'])}"]
+            # an unresolved term: its upper bound, never a value with an interval
+            alone = (f"{fmt(s['value'])} {interval_text(s['low'], s['high'])}" if s["resolved"]
+                     else f"< {fmt(s['high'], sig=2)} (95 %)")
+            pooled = (bound_text(p) if "upper" in p
+                      else f"{fmt(p['value'])} {interval_text(p['low'], p['high'])}")
+            row += [alone, pooled]
         o = u["outlier"]
         row += [fmt(o["p"], sig=2), "yes" if o["flagged"] else "no", u["taus_left_out"]]
         rows.append(row)
@@ -44,7 +59,8 @@ def pool_sections(name: str | None, pool: dict) -> list[Section]:
     head.text(f"{n} units pooled by a hierarchical model of their log noise terms: the "
               "population median is the typical unit, the spread factor is how much units "
               "differ (one log standard deviation), and a new unit of this type falls in the "
-              "last column's range with 90 % probability.")
+              "last column's range with 90 % probability. A term whose absence the units' "
+              "records do not exclude is shown as an upper bound (95 %) only.")
     head.table(["term", "unit", "population median", "90 % interval", "between-unit spread",
                 "90 % interval", "a new unit (90 %)"], _population_rows(pool))
     if pool.get("prior"):
@@ -68,7 +84,9 @@ def pool_sections(name: str | None, pool: dict) -> list[Section]:
     units.html(figure_html(pool_figure(pool, title=name or ""),
                            caption="Grey: each unit's own 90 % interval (a left arrow: not "
                                    "resolved, an upper bound); colour: pooled (red: flagged); "
-                                   "band: population median; dashed: a new unit's 90 % range."))
+                                   "band: population median (hatched from the edge: only "
+                                   "its 95 % bound, not resolved); dashed: a new unit's 90 % "
+                                   "range."))
     header = ["unit"]
     for t in pool["terms"]:
         header += [f"{t} alone", f"{t} pooled"]
