@@ -123,6 +123,10 @@ def model_section(doc: dict) -> Section:
             rows.append(row)
         sec.table(header, rows, caption="coefficients in the papers' raw form (bias = Σ coefficient "
                                         "× product of covariate powers, origin 0)")
+    if doc.get("model") == "composite":
+        from .composite import coefficient_table
+
+        coefficient_table(sec, doc)
     if bayes:
         _posterior_tables(sec, bayes)
     fit = doc.get("fit")

@@ -239,20 +239,13 @@ def _fmt(v):
 
 
 def _composite_headline(rec, det):
+    from ..report.composite import error_verdict
     from ..report.headline import headline_section, model_line
-    from ..report.html import fmt
 
     table = det.get("table")
     verdict, ok = "", None
     if isinstance(table, list) and table and "before_error_pct" in table[0]:
-        b = np.array([abs(r["before_error_pct"]) for r in table], float)
-        a = np.array([abs(r.get("fogbayes_error_pct", np.nan)) for r in table], float)
-        ppm = 1e4  # % -> parts per million, the unit of rate-table errors
-        verdict = (f"relative rate error over the {len(table)} table cells, before → after "
-                   f"compensation: median {fmt(ppm * np.nanmedian(b), sig=3)} → "
-                   f"{fmt(ppm * np.nanmedian(a), sig=3)} ppm, largest "
-                   f"{fmt(ppm * np.nanmax(b), sig=3)} → {fmt(ppm * np.nanmax(a), sig=3)} ppm.")
-        ok = bool(np.nanmedian(a) < np.nanmedian(b))
+        verdict, ok = error_verdict(table)
     return headline_section(rec, model=model_line(det), verdict=verdict or
                             "see the model section for the calibrated coefficients.", ok=ok)
 
