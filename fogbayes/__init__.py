@@ -1,8 +1,8 @@
 """fogbayes: probabilistic modelling of fiber-optic-gyroscope errors.
 
 Importing fogbayes turns on JAX float64 (see :mod:`fogbayes._config`). Beside load, save
-and Recording it offers fit, compensate, run_loop and allan_deviation
-(:mod:`fogbayes.workflow.api`), imported on first use.
+and Recording it offers fit, compensate, run_loop, allan_deviation
+(:mod:`fogbayes.workflow.api`) and report (:mod:`fogbayes.report`), imported on first use.
 """
 
 from . import _config  # noqa: F401  (float64 on before any JAX array is made)
@@ -11,7 +11,7 @@ from .errors import FogbayesError
 
 __version__ = "0.1.0"
 __all__ = ["FogbayesError", "Metadata", "Recording", "allan_deviation", "compensate", "fit",
-           "load", "run_loop", "save", "__version__"]
+           "load", "report", "run_loop", "save", "__version__"]
 
 def __getattr__(name: str):
     """The flat API (fogbayes.workflow.api.LAZY), resolved on first use: importing fogbayes
@@ -22,7 +22,8 @@ def __getattr__(name: str):
         import importlib
 
         module, attr = LAZY[name]
-        value = getattr(importlib.import_module(module), attr)
+        value = importlib.import_module(module)  # attr None: the (callable) module itself
+        value = value if attr is None else getattr(value, attr)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'fogbayes' has no attribute {name!r}")

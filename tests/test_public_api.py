@@ -45,7 +45,46 @@ def test_every_public_name_resolves_and_no_subpackage_is_shadowed():
     import pkgutil
 
     subpackages = {m.name for m in pkgutil.iter_modules(fogbayes.__path__)}
-    assert not set(fogbayes.__all__) & subpackages
+    # fogbayes.report is its own package, made callable: importing a submodule keeps it so
+    assert set(fogbayes.__all__) & subpackages == {"report"}
+    importlib.import_module("fogbayes.report.sections")
+    assert callable(fogbayes.report)
     for name in fogbayes.__all__:
         assert getattr(fogbayes, name) is not None
     assert importlib.import_module("fogbayes.simulate").simulate is simulate
+
+
+def _page_text(path) -> str:
+    """The report's text without its generation time and the embedded images' bytes."""
+    import re
+
+    page = path.read_text()
+    page = re.sub(r"\d{4}-\d{2}-\d{2} \d{2}:\d{2} UTC", "", page)
+    return re.sub(r'src="data:image/[^"]*"', "", page)
+
+
+def test_fogbayes_report_writes_what_the_command_writes(tmp_path):
+    """``fogbayes.report(rec, doc, out)`` == ``fogbayes report REC --fit doc.json --out``:
+    the same HTML (up to the time stamp and the figures' bytes), from a document in
+    memory or a path; a document of the wrong kind ends in the FogbayesError the command
+    prints."""
+    import json
+
+    from fogbayes.cli import main
+
+    rec = simulate("thermal", seed=3, duration=3600.0, fs=1.0).recording
+    csv = tmp_path / "rec.csv"
+    fogbayes.save(rec, csv)
+    rec = fogbayes.load(csv)
+    doc = fogbayes.fit(rec, model="thermal", orders="2,1")
+    (tmp_path / "fit.json").write_text(json.dumps(json.loads(json.dumps(
+        doc, default=lambda o: o.tolist() if hasattr(o, "tolist") else float(o)))))
+    assert main(["-q", "report", str(csv), "--fit", str(tmp_path / "fit.json"),
+                 "--out", str(tmp_path / "cli.html")]) == 0
+    api = fogbayes.report(rec, doc, tmp_path / "api.html")
+    assert api == tmp_path / "api.html"
+    assert _page_text(api) == _page_text(tmp_path / "cli.html")
+    by_path = fogbayes.report(csv, tmp_path / "fit.json", tmp_path / "path.html")
+    assert _page_text(by_path) == _page_text(tmp_path / "cli.html")
+    with pytest.raises(fogbayes.FogbayesError):
+        fogbayes.report(rec, {"model": "thermal", "schema": "no-such-schema"}, tmp_path / "x.html")

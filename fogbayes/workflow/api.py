@@ -7,6 +7,7 @@ starts neither JAX nor NumPyro; the functions are the ones the command line runs
     fogbayes.compensate(rec, doc)                        # == fogbayes compensate: columns
     fogbayes.run_loop(rec, model="bias-t")               # == fogbayes loop: a LoopResult
     fogbayes.allan_deviation(y, fs, taus="octave")       # overlapping ADEV, 90 % intervals
+    fogbayes.report(rec, doc, "report.html")             # == fogbayes report --fit: the HTML
 
 (``loop`` and ``simulate`` are subpackages, so the loop is ``run_loop`` here and the
 simulator stays ``fogbayes.simulate.simulate``: a function under a subpackage's name would
@@ -68,8 +69,10 @@ def run_loop(rec, *, model: str = "bias-t", **options):
     return run_loop(rec, model, **options)
 
 
-#: name -> (module, attribute) of the flat API
+#: name -> (module, attribute) of the flat API (attribute None: the module itself)
 LAZY = {"fit": ("fogbayes.workflow.api", "fit"),
         "compensate": ("fogbayes.workflow.api", "compensate"),
         "run_loop": ("fogbayes.workflow.api", "run_loop"),
-        "allan_deviation": ("fogbayes.stats.allan", "allan_deviation")}
+        "allan_deviation": ("fogbayes.stats.allan", "allan_deviation"),
+        # the package fogbayes.report, callable: fogbayes.report(rec, doc, "report.html")
+        "report": ("fogbayes.report", None)}
