@@ -37,6 +37,22 @@ at m = 8); allantools' ``edf_totdev`` falls back to the same formulas.
     -2 (RWFM)   0.75  0.31
     ==========  ====  ====
 
+**MTOTDEV / TTOTDEV as Stable32 1.60 computes them** (what ``total_deviation`` uses):
+Stable32's printed 68.3 % intervals of PHASE.DAT (1 001 phase points) are not Table 8's.
+Inverting them (``nu`` from each printed bound, Stable32's own sigma) gives two regimes:
+
+* ``T/tau = (N-1)/m > 100`` (PHASE.DAT: m = 1, 2, 4, 8): Greenhall's EDF of the
+  overlapping *modified* Allan variance (:func:`~fogbayes.stats.edf.edf_greenhall`,
+  d = 2), the value Stable32 prints for MDEV at the same m and alpha;
+* ``T/tau <= 100`` (m = 10 ... 256): :math:`\nu = b\,(N-1)/m - c`, linear in ``1/m`` to
+  within 0.01 EDF, with ``(b, c) = (1.3335, 1.894)`` for white FM and ``(1.7345, 2.993)`` for
+  flicker PM (least squares on the octave rows m = 16 ... 256; the decade rows m = 10, 20,
+  40, 100, 200 are then reproduced to 3.7e-4 in the bounds, every row to 4.4e-4). Stable32's tables fix no
+  other noise type; for alpha = 2, -1, -2 Table 8 is kept.
+
+The tables place the switch between m = 8 and m = 10 and cannot tell ``m < 10`` from
+``T/tau > 100``; the latter keeps the fitted line inside the range it was recovered on.
+
 **Theo1** (SP 1065 Table 11, Howe & Tasset), with :math:`\tau = 0.75\,m` (in units of
 ``tau0``, the Theo1 averaging time):
 
@@ -69,9 +85,15 @@ import math
 
 import numpy as np
 
+from .edf import edf_greenhall
+
 TOTDEV_TABLE = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}
 MTOTDEV_TABLE = {2: (1.90, 2.10), 1: (1.20, 1.40), 0: (1.10, 1.20), -1: (0.85, 0.50),
                  -2: (0.75, 0.31)}
+#: (b, c) of Stable32's MTOTDEV/TTOTDEV EDF for T/tau <= 100 (module doc), alpha 0 and 1
+MTOTDEV_STABLE32 = {0: (1.3335, 1.894), 1: (1.7345, 2.993)}
+#: above this T/tau = (N-1)/m, Stable32 uses the MDEV EDF for MTOTDEV/TTOTDEV
+MTOTDEV_STABLE32_SWITCH = 100.0
 THEO1_BIAS = {2: (0.09, 0.74, 0.40), 1: (0.14, 0.82, 0.30), 0: (1.0, 0.0, 0.0),
               -1: (1.87, -1.05, 0.79), -2: (2.70, -1.53, 0.85)}
 TOTVAR_BIAS = {-1: 1.0 / (3.0 * math.log(2.0)), -2: 0.750}
@@ -114,6 +136,23 @@ def edf_mtotdev(alpha: int, m: int, N: int) -> float:
     return _positive(b * N / m - c)
 
 
+def edf_mtotdev_stable32(alpha: int, m: int, N: int) -> float:
+    """MTOTDEV (and TTOTDEV) EDF as Stable32 1.60 computes it (module doc), ``N`` phase points.
+
+    Example:
+        >>> round(edf_mtotdev_stable32(0, 64, 1001), 2)    # 1.3335 * 1000 / 64 - 1.894
+        18.94
+    """
+    alpha = int(alpha)
+    if (N - 1) / m > MTOTDEV_STABLE32_SWITCH:
+        return _positive(edf_greenhall(alpha, 2, int(m), int(N), overlapping=True,
+                                       modified=True))
+    if alpha in MTOTDEV_STABLE32:
+        b, c = MTOTDEV_STABLE32[alpha]
+        return _positive(b * (N - 1) / m - c)
+    return edf_mtotdev(alpha, m, N)
+
+
 def edf_theo1(alpha: int, m: int, N: int) -> float:
     """Theo1 EDF (module doc), ``tau = 0.75 m``, ``N`` phase points."""
     t, N, alpha = 0.75 * float(m), float(N), int(alpha)
@@ -134,7 +173,8 @@ def edf_theo1(alpha: int, m: int, N: int) -> float:
     return _positive(v)
 
 
-_EDF = {"totdev": edf_totdev, "mtotdev": edf_mtotdev, "ttotdev": edf_mtotdev,
+_EDF = {"totdev": edf_totdev, "mtotdev": edf_mtotdev_stable32,
+        "ttotdev": edf_mtotdev_stable32,
         "theo1": edf_theo1}
 
 

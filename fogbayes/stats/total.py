@@ -40,8 +40,9 @@ largest valid m, for TOTDEV N // 2).
 Noise type per tau: the lag-1 autocorrelation of :func:`~fogbayes.stats.noise_id.identify_alphas`
 at cluster size ``m`` (TOTDEV: the oadev rules; MTOTDEV/TTOTDEV: the mdev rules; Theo1: at
 ``round(0.75 m)``, the averaging time it estimates), carried forward where fewer than 30
-cluster means remain. EDF: :mod:`~fogbayes.stats.edf_total` (SP 1065 Tables 7, 8 and the
-Theo1 fits); interval :func:`~fogbayes.stats.edf.chi2_interval` at confidence ``ci``.
+cluster means remain. EDF: :mod:`~fogbayes.stats.edf_total` (SP 1065 Table 7, the Theo1
+fits, MTOTDEV/TTOTDEV as Stable32 1.60 computes them); interval
+:func:`~fogbayes.stats.edf.chi2_interval` at confidence ``ci``.
 
 Missing samples (NaN) are refused: the reflected extensions have no definition across a gap.
 
@@ -70,7 +71,8 @@ KINDS = ("totdev", "mtotdev", "ttotdev", "theo1")
 _NOTES = {
     "totdev": "TOTDEV (SP 1065 eq. 25, reflected phase); EDF SP 1065 Table 7 (alpha 0..-2), "
               "Table 5 (alpha 2, 1); noise type: lag-1 ACF (oadev rules)",
-    "mtotdev": "MTOTDEV (SP 1065 eq. 27); EDF SP 1065 Table 8; noise type: lag-1 ACF "
+    "mtotdev": "MTOTDEV (SP 1065 eq. 27); EDF as Stable32 1.60 (MDEV EDF for T/tau > 100, "
+               "else b T/tau - c); noise type: lag-1 ACF "
                "(mdev rules)",
     "theo1": "Theo1 (SP 1065 eq. 30), tau = 0.75 m tau0; EDF: SP 1065 Theo1 fits; noise "
              "type: lag-1 ACF at m' = round(0.75 m)",
