@@ -120,6 +120,8 @@ def test_allan_legend_leaves_the_plot_its_width():
     legend = ax.get_legend() or fig.legends[0]
     box, axbox, fbox = (legend.get_window_extent(), ax.get_window_extent(), fig.bbox)
     assert not box.overlaps(axbox)
+    assert not box.overlaps(ax.xaxis.label.get_window_extent())
+    assert not box.overlaps(ax.xaxis.get_tightbbox())  # nor the tick labels
     assert box.x0 >= fbox.x0 - 1 and box.x1 <= fbox.x1 + 1 and box.y0 >= fbox.y0 - 1
     assert axbox.width >= 0.75 * fbox.width
     plt.close(fig)

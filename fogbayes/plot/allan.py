@@ -73,7 +73,12 @@ def _draw(ax, doc: dict, title: str) -> None:
     ax.set_ylabel(f"Allan deviation ({doc.get('unit', 'deg/h')})")
     ax.set_title(escape_mathtext(title))
     # below the plot, two columns: the plot keeps the figure's width
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, borderaxespad=0,
+    # (anchored a fixed 36 points under the axes: below the tick labels and the axis label
+    # whatever the panel's height)
+    from matplotlib.transforms import offset_copy
+
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=2, borderaxespad=0,
+              bbox_transform=offset_copy(ax.transAxes, fig=ax.figure, y=-36, units="points"),
               columnspacing=1.2, handlelength=2.6)
 
 
