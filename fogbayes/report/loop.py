@@ -60,7 +60,7 @@ def loop_headline(res, rec=None):
         added, whole = loop_intervals(res)
     except (ValueError, FogbayesError):  # fewer than three 1 s windows
         return headline_section(rec, model=model, what=what, verdict=(
-            f"The loop added {', '.join(res.effects) or 'nothing'}; the record is too short "
+            f"The loop added {'; '.join(effect_phrase(st.effect, st.detail, st.covariates) for st in res.steps) or 'nothing'}; the record is too short "
             "for a bias stability with an interval."))
     if res.steps:
         desc = [effect_phrase(st.effect, st.detail, st.covariates) for st in res.steps]
