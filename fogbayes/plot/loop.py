@@ -5,7 +5,8 @@ For every added effect: the residual of the model *before* the step (10 s block 
 against time with the added term's fitted contribution on top, and the same residual
 against the term's own driver (a partial-residual plot) -- the residual that justified
 the addition. A term driven by time itself (a step, a drift) shows the residual before and
-after the step instead, since against time the first panel would be drawn twice. Noise steps show the autocorrelation of the whitened residual instead.
+after the step instead, since against time the first panel would be drawn twice. Noise
+steps show the autocorrelation of the whitened residual instead.
 """
 
 from __future__ import annotations

@@ -105,7 +105,8 @@ def coefficient_table(sec: Section, doc: dict) -> bool:
     out_unit = (doc.get("input") or {}).get("unit") or "U"
 
     def flat(d):
-        return [float(x) for k in ("M", "c", "d") for x in np.ravel(np.asarray(d.get(k, []), float))]
+        return [float(x) for k in ("M", "c", "d")
+                for x in np.ravel(np.asarray(d.get(k, []), float))]
 
     vals, sd, lo, hi = (flat(p[k]) for k in ("raw", "raw_sd", "raw_lo90", "raw_hi90"))
     bayes = doc.get("bayes") or {}
@@ -126,7 +127,8 @@ def coefficient_table(sec: Section, doc: dict) -> bool:
         header[5:5] = ["posterior mean", "posterior 90 %"]
     sec.table(header, rows, caption=(
         f"raw coefficients of U = Σ M_ij T^i W^(j+1) + Σ c_i T^i + t Σ d_i T^i (paper 000; "
-        f"U in {out_unit}, T in °C, W in °/s, t in s), orders {doc.get('orders', {}).get('label', '')}; "
+        f"U in {out_unit}, T in °C, W in °/s, t in s), orders "
+        f"{doc.get('orders', {}).get('label', '')}; "
         "intervals from the fit's covariance under its noise model"))
     return True
 

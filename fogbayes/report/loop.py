@@ -56,14 +56,14 @@ def loop_headline(res, rec=None):
     model = (f"closed loop from the {res.model} base model; final model {final}"
              if res.steps else f"closed loop from the {res.model} base model; nothing added")
     what = None if rec is not None else _what(res)
+    desc = [effect_phrase(st.effect, st.detail, st.covariates) for st in res.steps]
     try:
         added, whole = loop_intervals(res)
     except (ValueError, FogbayesError):  # fewer than three 1 s windows
         return headline_section(rec, model=model, what=what, verdict=(
-            f"The loop added {'; '.join(effect_phrase(st.effect, st.detail, st.covariates) for st in res.steps) or 'nothing'}; the record is too short "
+            f"The loop added {'; '.join(desc) or 'nothing'}; the record is too short "
             "for a bias stability with an interval."))
     if res.steps:
-        desc = [effect_phrase(st.effect, st.detail, st.covariates) for st in res.steps]
         sentence, ok = improvement_verdict(added, f"The loop added {'; '.join(desc)}. This")
     else:
         sentence = (f"Nothing supported: the loop added no effect to {res.model} "
