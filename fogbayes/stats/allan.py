@@ -47,7 +47,7 @@ _NOISE_ID = ThreadPoolExecutor(1, thread_name_prefix="fogbayes-noise-id")
 
 def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_decade: int = 20,
                     m_max: int | None = None, ci: float = 0.9,
-                    method: str = "auto") -> AllanDeviation:
+                    method: str = "auto", bias_corrected: bool = False) -> AllanDeviation:
     """Allan-family deviation of rate samples ``y`` (shape (n,) or (batch, n)) at rate ``fs``.
 
     Args:
@@ -60,9 +60,10 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             deg for a gyro in deg/h; its intervals and noise types are the MDEV ones),
             or a total deviation handled by :func:`fogbayes.stats.total.total_deviation`:
             ``totdev`` (NIST SP 1065 eq. 25), ``mtotdev`` (eq. 27), ``ttotdev``
-            (tau MTOTDEV / sqrt(3)) and ``theo1`` (eq. 30; even m, tau = 0.75 m / fs),
-            with their own EDF (SP 1065 Tables 7, 8, Theo1 fits); no NaN gaps for these,
-            ``method`` is not used and ``taus`` takes the same grids.
+            (tau MTOTDEV / sqrt(3)), ``htotdev`` (Hadamard total, drift-free; OHDEV at
+            m = 1) and ``theo1`` (eq. 30; even m, tau = 0.75 m / fs), with their own EDF
+            (:mod:`~fogbayes.stats.edf_total`); no NaN gaps for these, ``method`` is not
+            used and ``taus`` takes the same grids.
         per_decade: points per decade of the ``dense`` grid.
         m_max: largest cluster size (default: Stable32's stop ratio, see ``taus``).
         ci: two-sided confidence of ``dev_low``/``dev_high`` (0.683 for Stable32's 1 sigma).
@@ -72,12 +73,20 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             (those accumulators on any backend; ``oadev`` only), or a kernel path of
             :func:`~fogbayes.stats.allan_kernels.allan_sums` (``direct``, ``chunked``,
             ``mapped``).
+        bias_corrected: total kinds only: remove the estimator's bias for the identified
+            noise type (``theo1``: to AVAR at tau = 0.75 m / fs; ``htotdev``: Stable32's
+            Htotvar/Hvar factors; ``totdev``: flicker and random-walk FM), see
+            :func:`~fogbayes.stats.total.total_deviation`.
     """
-    if kind in ("totdev", "mtotdev", "ttotdev", "theo1"):  # total family (own module)
+    if kind in ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1"):  # total family
         from .total import total_deviation
 
         return total_deviation(y, fs, taus=taus, kind=kind, ci=ci, m_max=m_max,
-                               per_decade=per_decade)
+                               per_decade=per_decade, bias_corrected=bias_corrected)
+    if bias_corrected:
+        raise FogbayesError(f"bias_corrected applies to the total kinds, not {kind}",
+                            column="bias_corrected",
+                            fix="use kind='totdev', 'htotdev' or 'theo1', or leave it out")
     if kind == "tdev":  # TDEV^2 = tau^2 Mod AVAR / 3: the modified variance, rescaled
         r = allan_deviation(y, fs, taus=taus, kind="mdev", per_decade=per_decade, m_max=m_max,
                             ci=ci, method=method)
@@ -90,7 +99,8 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
                             fix="pass one sensor as (n,) or a batch as (sensors, n)")
     if kind not in KINDS:
         raise FogbayesError(f"unknown deviation '{kind}'",
-                            fix=f"use one of {', '.join(KINDS)}, tdev, totdev, mtotdev, ttotdev, theo1")
+                            fix=f"use one of {', '.join(KINDS)}, tdev, totdev, mtotdev, "
+                                "ttotdev, htotdev, theo1")
     if not (np.isfinite(fs) and fs > 0):
         raise FogbayesError(f"sample rate must be positive and finite, got {fs}",
                             fix="pass fs in Hz")

@@ -1,4 +1,4 @@
-r"""Equivalent degrees of freedom of TOTDEV, MTOTDEV and Theo1 (NIST SP 1065, sec. 5.3).
+r"""Equivalent degrees of freedom of TOTDEV, MTOTDEV, HTOTDEV and Theo1 (NIST SP 1065, sec. 5.3).
 
 ``N`` is the number of phase points (``n + 1`` for ``n`` rate samples) and ``m`` the
 averaging factor throughout; ``alpha`` is the power-law exponent of the rate PSD
@@ -47,11 +47,25 @@ Inverting them (``nu`` from each printed bound, Stable32's own sigma) gives two 
 * ``T/tau <= 100`` (m = 10 ... 256): :math:`\nu = b\,(N-1)/m - c`, linear in ``1/m`` to
   within 0.01 EDF, with ``(b, c) = (1.3335, 1.894)`` for white FM and ``(1.7345, 2.993)`` for
   flicker PM (least squares on the octave rows m = 16 ... 256; the decade rows m = 10, 20,
-  40, 100, 200 are then reproduced to 3.7e-4 in the bounds, every row to 4.4e-4). Stable32's tables fix no
-  other noise type; for alpha = 2, -1, -2 Table 8 is kept.
+  40, 100, 200 are then reproduced to 3.7e-4 in the bounds, every row to 4.4e-4).
+  Stable32's tables fix no other noise type; for alpha = 2, -1, -2 Table 8 is kept.
 
 The tables place the switch between m = 8 and m = 10 and cannot tell ``m < 10`` from
 ``T/tau > 100``; the latter keeps the fitted line inside the range it was recovered on.
+
+**HTOTDEV** (Stable32 1.60 on PHASE.DAT, SP 1065 sec. 5.3): for white FM and ``m >= 16``,
+:math:`\nu = (N/m) / (b_0 + b_1\,m/N)` with ``(b0, b1) = (0.559, 1.004)`` (the printed
+bounds at m = 16, 32, 64 to 5e-4); for PM noise the Table 5 (Stein) formulas above, as for
+TOTDEV (white PM: every printed bound, m = 1 ... 256, to 4e-4; flicker PM: m = 128 to
+2.7e-3, m = 256 to 1.4e-2, where Stable32's EDF is 12 % larger than Stein's). Elsewhere
+(m < 16, and FM noises other than white) Stable32's rule is not recovered here: Greenhall's
+EDF of the overlapping Hadamard variance is used, which HTOTDEV's own EDF exceeds, so those
+intervals are conservative (PHASE.DAT white FM, m = 1 ... 8: bounds 0.14-0.9 % wider).
+
+**HTOTDEV bias** (Stable32; Howe et al.): ``E[Htotvar] / Hvar`` = 0.995 (white FM), 0.851
+(flicker FM), 0.771 (random-walk FM), 0.717 (alpha = -3), 0.679 (alpha = -4); 1 for PM noise.
+Stable32 divides by it (PHASE.DAT: its corrected and uncorrected tables differ by exactly
+1/sqrt(0.995) at white FM, m >= 2, and not at all at flicker PM or m = 1).
 
 **Theo1** (SP 1065 Table 11, Howe & Tasset), with :math:`\tau = 0.75\,m` (in units of
 ``tau0``, the Theo1 averaging time):
@@ -94,6 +108,10 @@ MTOTDEV_TABLE = {2: (1.90, 2.10), 1: (1.20, 1.40), 0: (1.10, 1.20), -1: (0.85, 0
 MTOTDEV_STABLE32 = {0: (1.3335, 1.894), 1: (1.7345, 2.993)}
 #: above this T/tau = (N-1)/m, Stable32 uses the MDEV EDF for MTOTDEV/TTOTDEV
 MTOTDEV_STABLE32_SWITCH = 100.0
+#: (b0, b1) of the HTOTDEV EDF, white FM, m >= 16 (module doc)
+HTOTDEV_WFM = (0.559, 1.004)
+#: E[Htotvar] / Hvar per noise type (module doc); PM noise: 1
+HTOTVAR_BIAS = {0: 0.995, -1: 0.851, -2: 0.771, -3: 0.717, -4: 0.679}
 THEO1_BIAS = {2: (0.09, 0.74, 0.40), 1: (0.14, 0.82, 0.30), 0: (1.0, 0.0, 0.0),
               -1: (1.87, -1.05, 0.79), -2: (2.70, -1.53, 0.85)}
 TOTVAR_BIAS = {-1: 1.0 / (3.0 * math.log(2.0)), -2: 0.750}
@@ -153,6 +171,28 @@ def edf_mtotdev_stable32(alpha: int, m: int, N: int) -> float:
     return edf_mtotdev(alpha, m, N)
 
 
+def edf_htotdev(alpha: int, m: int, N: int) -> float:
+    """HTOTDEV EDF (module doc) for noise ``alpha``, ``N`` phase points (``N - 1`` rates).
+
+    Example:
+        >>> round(edf_htotdev(0, 32, 1001), 2)     # (1001/32) / (0.559 + 1.004 * 32/1001)
+        52.92
+    """
+    alpha, m = int(alpha), int(m)
+    if alpha == 0 and m >= 16:
+        b0, b1 = HTOTDEV_WFM
+        return _positive((N / m) / (b0 + b1 * m / N))
+    if alpha in (2, 1):
+        return edf_avar_simple(alpha, m, N)
+    return _positive(edf_greenhall(alpha, 3, m, N, overlapping=True))
+
+
+def htotvar_bias_ratio(alphas, ms) -> np.ndarray:
+    """Hvar / E[Htotvar] (the factor that removes HTOTDEV's bias); 1 at m = 1 (OHDEV)."""
+    return np.array([1.0 if int(m) == 1 else 1.0 / HTOTVAR_BIAS.get(int(a), 1.0)
+                     for a, m in zip(alphas, ms)], dtype=float)
+
+
 def edf_theo1(alpha: int, m: int, N: int) -> float:
     """Theo1 EDF (module doc), ``tau = 0.75 m``, ``N`` phase points."""
     t, N, alpha = 0.75 * float(m), float(N), int(alpha)
@@ -174,7 +214,7 @@ def edf_theo1(alpha: int, m: int, N: int) -> float:
 
 
 _EDF = {"totdev": edf_totdev, "mtotdev": edf_mtotdev_stable32,
-        "ttotdev": edf_mtotdev_stable32,
+        "ttotdev": edf_mtotdev_stable32, "htotdev": edf_htotdev,
         "theo1": edf_theo1}
 
 

@@ -1,4 +1,4 @@
-r"""Total deviations TOTDEV, MTOTDEV, TTOTDEV and Theo1 with EDF and chi-square intervals.
+r"""Total deviations TOTDEV, MTOTDEV, TTOTDEV, HTOTDEV and Theo1 with EDF and chi-square intervals.
 
 :func:`total_deviation` returns the same :class:`~fogbayes.stats.allan_result.AllanDeviation`
 record as :func:`~fogbayes.stats.allan.allan_deviation` (which dispatches these kinds
@@ -28,6 +28,22 @@ here). Rate samples :math:`y_0 \dots y_{n-1}` at ``fs``, ``tau0 = 1/fs``, phase
   \mathrm{Mod}\sigma_{TOT}(\tau)/\sqrt 3` (``tau^2/3`` on the variance; SP 1065's printed
   ``tau^3`` is a typo, as allantools notes), in the unit of ``y`` times seconds; intervals,
   noise types and EDF are MTOTDEV's (as ``tdev`` from ``mdev``).
+* ``htotdev`` (sec. 5.2.14, Hadamard total variance; Howe et al. 2001): the MTOTDEV
+  construction applied to the rate itself. For each of the ``n - 3m + 1`` subsequences of
+  ``3m`` rate samples, remove the half-average slope (the linear drift), extend by even
+  (uninverted) reflection to ``9m`` points :math:`y^\#` and average the ``6m`` squared
+  Hadamard differences of ``m``-point means:
+
+  .. math:: \mathrm{Htot\,var}(\tau) = \frac{1}{6 (n-3m+1)} \sum_{j=1}^{n-3m+1}
+      \frac{1}{6m} \sum_{i=j-3m}^{j+3m-1} \big(\bar y^\#_{i+2m} - 2\bar y^\#_{i+m}
+      + \bar y^\#_i\big)^2, \qquad 2 \le m \le n/3;
+
+  at ``m = 1`` the overlapping Hadamard variance (Stable32's and allantools' convention).
+  ``n_terms`` = n - 3m + 1. Drift (a rate ramp) does not bias it. ``bias_corrected``
+  divides by Stable32's Htotvar/Hvar ratio for the identified noise:
+  0.995 (white FM), 0.851 (flicker FM), 0.771 (random-walk FM), 0.717 (alpha = -3),
+  0.679 (alpha = -4), 1 for PM noise and at ``m = 1``
+  (:data:`~fogbayes.stats.edf_total.HTOTVAR_BIAS`).
 * ``theo1`` (sec. 5.2.14, eq. 30): see :mod:`~fogbayes.stats.theo1`; ``m`` even,
   ``2 <= m <= N - 1``, **tau = 0.75 m tau0** (``AllanDeviation.m`` holds m, ``tau`` the
   Theo1 averaging time; allantools reports ``m tau0`` as its tau), ``n_terms`` = N - m.
@@ -59,7 +75,8 @@ import numpy as np
 from ..errors import FogbayesError, TooShortError
 from .allan_result import AllanDeviation
 from .edf import chi2_interval
-from .edf_total import edf_for_total_kind, theo1_bias_ratio, totvar_bias_ratio
+from .edf_total import (edf_for_total_kind, htotvar_bias_ratio, theo1_bias_ratio,
+                         totvar_bias_ratio)
 from .noise_id import identify_alphas
 from .taus import GRIDS, TauGridError
 from .theo1 import theo1_limit, theo1_variance
@@ -67,13 +84,15 @@ from .total_loops import mtotvar_sums, phase_samples, prefix2, totvar_sums
 
 __all__ = ["KINDS", "total_deviation", "total_grid", "total_variance"]
 
-KINDS = ("totdev", "mtotdev", "ttotdev", "theo1")
+KINDS = ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1")
 _NOTES = {
     "totdev": "TOTDEV (SP 1065 eq. 25, reflected phase); EDF SP 1065 Table 7 (alpha 0..-2), "
               "Table 5 (alpha 2, 1); noise type: lag-1 ACF (oadev rules)",
     "mtotdev": "MTOTDEV (SP 1065 eq. 27); EDF as Stable32 1.60 (MDEV EDF for T/tau > 100, "
                "else b T/tau - c); noise type: lag-1 ACF "
                "(mdev rules)",
+    "htotdev": "HTOTDEV (SP 1065 sec. 5.2.14, detrended and reflected rate; OHDEV at m = 1); "
+               "noise type: lag-1 ACF (ohdev rules)",
     "theo1": "Theo1 (SP 1065 eq. 30), tau = 0.75 m tau0; EDF: SP 1065 Theo1 fits; noise "
              "type: lag-1 ACF at m' = round(0.75 m)",
 }
@@ -86,6 +105,8 @@ def _limits(n: int, kind: str) -> tuple[int, int]:
         return n, N // 2
     if kind == "mtotdev":
         return N // 3, N // 3
+    if kind == "htotdev":
+        return n // 3, n // 3
     top = theo1_limit(n)
     return top, top
 
@@ -137,7 +158,7 @@ def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
         return theo1_variance(y, ms)
     y = np.ascontiguousarray(y, dtype=np.float64)
     ms = np.asarray(ms, dtype=np.int64).reshape(-1)
-    if kind not in ("totdev", "mtotdev") or y.ndim != 1:
+    if kind not in ("totdev", "mtotdev", "htotdev") or y.ndim != 1:
         raise FogbayesError(f"total_variance takes 1-D data and totdev, mtotdev or theo1, got "
                             f"'{kind}' and shape {y.shape}", fix="pass one sensor as (n,)")
     N = y.size + 1
@@ -146,9 +167,11 @@ def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
         raise TooShortError(f"{kind} needs averaging factors in 1..{limit} for {y.size} "
                             f"samples, got {ms.tolist()}", column="taus",
                             fix="pass smaller cluster sizes (samples, not s)")
-    S = phase_samples(y, float(np.mean(y)))
     sums = np.zeros(ms.size)
     m = ms.astype(float)
+    if kind == "htotdev":
+        return _htotvar(y, ms)
+    S = phase_samples(y, float(np.mean(y)))
     if kind == "totdev":
         totvar_sums(S, ms, sums)
         count = np.full(ms.size, N - 2.0)
@@ -159,25 +182,44 @@ def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
     return sums / (12.0 * m**5 * count), count
 
 
+def _htotvar(y, ms):
+    """HTOTVAR (module doc): MTOTDEV's compiled sums over the rate as the sequence (the
+    Hadamard difference of m-point means is MTOTDEV's second difference of m-point sums
+    over m); m = 1 is the overlapping Hadamard variance."""
+    Y = np.ascontiguousarray(y - np.mean(y))
+    hi, lo = prefix2(Y)
+    sums = np.zeros(ms.size)
+    mtotvar_sums(Y, hi, lo, ms, sums)
+    m = ms.astype(float)
+    count = Y.size - 3.0 * m + 1.0
+    var = sums / (36.0 * m**3 * count)
+    if (ms == 1).any():
+        d = Y[2:] - 2 * Y[1:-1] + Y[:-2]
+        var[ms == 1] = np.mean(d * d) / 6.0
+    return var, count
+
+
 def total_deviation(y, fs: float, *, taus="octave", kind: str = "totdev", ci: float = 0.9,
                     m_max: int | None = None, per_decade: int = 20,
                     bias_corrected: bool = False):
-    """TOTDEV, MTOTDEV, TTOTDEV or Theo1 of rate samples ``y`` with chi-square intervals.
+    """TOTDEV, MTOTDEV, TTOTDEV, HTOTDEV or Theo1 of rate samples ``y`` with chi-square intervals.
 
     Args:
         y: rate samples (shape (n,), or (batch, n) computed row by row), any unit; no NaN.
         fs: sample rate in Hz.
         taus: ``octave``, ``decade``, ``dense``, ``all`` or explicit averaging factors ``m``
             (Theo1: even, tau = 0.75 m / fs).
-        kind: ``totdev``, ``mtotdev``, ``ttotdev`` or ``theo1`` (module doc).
+        kind: ``totdev``, ``mtotdev``, ``ttotdev``, ``htotdev`` or ``theo1`` (module doc).
         ci: two-sided confidence of ``dev_low``/``dev_high`` (0.683 for Stable32's 1 sigma).
         m_max: largest averaging factor of a named grid.
         per_decade: points per decade of the ``dense`` grid.
         bias_corrected: multiply the variance (and its interval) by AVAR / E[estimator] for
             the identified noise type: Theo1 (:func:`~fogbayes.stats.edf_total.theo1_bias_ratio`)
-            and TOTDEV (flicker and random-walk FM,
-            :func:`~fogbayes.stats.edf_total.totvar_bias_ratio`); no correction exists here
-            for MTOTDEV/TTOTDEV (refused).
+            TOTDEV (flicker and random-walk FM,
+            :func:`~fogbayes.stats.edf_total.totvar_bias_ratio`) and HTOTDEV (Hvar /
+            E[Htotvar], Stable32's factors,
+            :func:`~fogbayes.stats.edf_total.htotvar_bias_ratio`); no correction exists
+            here for MTOTDEV/TTOTDEV (refused).
 
     Returns:
         :class:`~fogbayes.stats.allan_result.AllanDeviation` (``excluded`` zeros, ``n_missing`` 0).
@@ -241,10 +283,13 @@ def _one(y, ms, kind, n, ci, bias_corrected):
     if kind == "theo1":
         alpha = identify_alphas(y, [max(1, round(0.75 * m)) for m in ms], kind="oadev")
     else:
-        alpha = identify_alphas(y, ms, kind="oadev" if kind == "totdev" else "mdev")
+        rules = {"totdev": "oadev", "htotdev": "ohdev"}.get(kind, "mdev")
+        alpha = identify_alphas(y, ms, kind=rules)
     edf = edf_for_total_kind(alpha, ms, n, kind)
     if bias_corrected:
-        var = var * (theo1_bias_ratio(alpha, ms) if kind == "theo1"
-                     else totvar_bias_ratio(alpha, ms, n))
+        ratio = {"theo1": lambda: theo1_bias_ratio(alpha, ms),
+                 "htotdev": lambda: htotvar_bias_ratio(alpha, ms)}.get(
+                     kind, lambda: totvar_bias_ratio(alpha, ms, n))
+        var = var * ratio()
     lo, hi = chi2_interval(var, edf, ci)
     return var, count, alpha, edf, lo, hi
