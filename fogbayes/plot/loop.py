@@ -86,12 +86,21 @@ def step_figure(res, i: int):
         ax[1].set_xlabel("time [h]")
         ax[1].set_title(f"residual before and after adding {s.effect}")
     else:
+        # partial residual: the residual after the step plus the added term's own part.
+        # (before - after would add the refit's shift of the base terms, which splits the
+        # points of one driver value by temperature, e.g. two cooling ramps into branches)
         drv, dlabel = driver(s.term, ctx.cov)
         _, db = _blocks(t, drv, out)
-        ax[1].plot(db, rb, ".", ms=2, color=COLORS["data"], label="residual before")
-        ax[1].plot(db, cb, ".", ms=2, color=model_color("loop"), label=f"+ {s.effect}")
+        j = sum(tm.n_cols for tm in s.fit.terms[:list(s.fit.terms).index(s.term)])
+        own = columns(s.term, ctx.cov) @ s.fit.beta[j:j + s.term.n_cols]
+        r_after = s.fit.residual - np.mean(s.fit.residual[~out])
+        _, pb = _blocks(t, r_after + own, out)
+        _, ob = _blocks(t, own, out)
+        ax[1].plot(db, pb, ".", ms=2, color=COLORS["data"],
+                   label="residual after\n+ the term's part")
+        ax[1].plot(db, ob, ".", ms=2, color=model_color("loop"), label=f"+ {s.effect}")
         ax[1].set_xlabel(dlabel)
-        ax[1].set_title("residual against the added term's driver")
+        ax[1].set_title("partial residual against the added term's driver")
     ax[1].set_ylabel("10 s means [deg/h]")
     ax[1].legend(**LEGEND_RIGHT)
     ax[0].set_xlabel("time [h]")
