@@ -100,3 +100,36 @@ def test_bias_correction_and_refusals():
     y[5] = np.nan
     with pytest.raises(FogbayesError, match="missing"):
         allan_deviation(y, 1.0, kind="htotdev")
+
+
+def test_cli_kind_and_bias_corrected(tmp_path, capsys):
+    """`fogbayes allan --kind htotdev --bias-corrected`: the document carries the deviation
+    (equal to allan_deviation on the same rate), the report line names it; a ramp-free
+    Hadamard total beside the OADEV fit. Wrong combinations end in one line naming the flag."""
+    import json
+
+    from fogbayes.cli import main
+    from fogbayes.data import load
+
+    rng = np.random.default_rng(7)
+    y = rng.normal(size=3000) + 0.02 * np.arange(3000)  # white rate + a ramp, deg/h
+    path = tmp_path / "r.csv"
+    path.write_text("time,output\n" + "".join(f"{t:.1f},{v:.17g}\n" for t, v in enumerate(y)))
+    assert main(["allan", str(path), "--json", "-", "--kind", "htotdev",
+                 "--bias-corrected"]) == 0
+    cap = capsys.readouterr()
+    doc = json.loads(cap.out)
+    d = doc["deviation"]
+    assert d["kind"] == "htotdev" and d["bias_corrected"] is True
+    rate = load(path).rate("deg/h")
+    ref = allan_deviation(np.asarray(rate), 1.0, kind="htotdev", ci=0.9, bias_corrected=True)
+    np.testing.assert_allclose(d["dev"], ref.dev, rtol=1e-12)
+    np.testing.assert_allclose(d["dev_high"], ref.dev_high, rtol=1e-12)
+    assert "htotdev, bias-corrected:" in cap.err
+    oadev = allan_deviation(np.asarray(rate), 1.0, ci=0.9)  # the fitted curve stays OADEV
+    np.testing.assert_allclose(doc["adev"], oadev.dev, rtol=1e-9)
+    for args, flag in ((["--kind", "foo"], "--kind"),
+                       (["--kind", "mdev", "--bias-corrected"], "--bias-corrected")):
+        assert main(["allan", str(path), "--json", str(tmp_path / "x.json"), *args]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and flag in err and "Fix:" in err

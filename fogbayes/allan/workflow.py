@@ -19,7 +19,12 @@ R deg/h^2. An Allan model describes random noise: ``compensate_recording`` refus
 
 Options (``**options``, e.g. ``fogbayes fit --option taus=dense``): ``taus`` (octave, decade,
 dense, all), ``per_decade`` (20), ``select`` (True: term selection with ``bayes``),
-``num_warmup``/``num_samples``/``num_chains`` (sampler sizes).
+``num_warmup``/``num_samples``/``num_chains`` (sampler sizes), ``kind`` and
+``bias_corrected``: a second deviation of the same rate beside the OADEV the fit uses
+(any kind of :func:`fogbayes.stats.allan.allan_deviation`: ``mdev``, ``tdev``, ``hdev``,
+``ohdev``, ``totdev``, ``mtotdev``, ``ttotdev``, ``htotdev``, ``theo1``, ...), stored under
+``deviation`` (kind, bias_corrected, tau, dev, dev_low, dev_high, edf, alpha, n_terms, note;
+90 % intervals). The five-term fit is always on the OADEV.
 
 ``prior`` (with ``bayes`` only): a datasheet prior (:mod:`fogbayes.inference.datasheet`:
 a ``DatasheetPrior``, a ``fogbayes.prior/1`` document or its path); the posterior uses a
@@ -42,7 +47,8 @@ from ..stats.allan import allan_deviation
 
 MODELS = ("allan",)
 CI = 0.9
-_OPTIONS = ("taus", "per_decade", "select", "num_warmup", "num_samples", "num_chains")
+_OPTIONS = ("taus", "per_decade", "select", "num_warmup", "num_samples", "num_chains", "kind",
+            "bias_corrected")
 _ALL_TAUS_MAX = 200_000
 
 
@@ -193,7 +199,8 @@ def fit_recording(rec, *, model: str = "allan", orders: str | None = None, bayes
                     "rule": "shortest octave taus left out while the GLS goodness of fit has "
                             "p < 1e-3 (sensor filtering), at most a third of them"}
     params = {t: (fit["terms"][t]["value"] if t in fit["terms"] else 0.0) for t in TERMS}
-    return {"schema": FIT_SCHEMA, "model": "allan", "fogbayes_version": __version__,
+    extra = _second_deviation(y, fs, options)
+    doc = {"schema": FIT_SCHEMA, "model": "allan", "fogbayes_version": __version__,
             "sensor_id": rec.meta.sensor_id,
             "source": rec.meta.source, "n": int(y.size), "fs": fs, "unit": "deg/h",
             "input_unit": rec.unit, "ci": CI, "taus": options.get("taus", "octave"),
@@ -202,6 +209,28 @@ def fit_recording(rec, *, model: str = "allan", orders: str | None = None, bayes
             "adev_high": dev.dev_high, "edf": dev.edf, "alpha": dev.alpha,
             "n_terms": dev.n_terms, "fit": fit, "comparison": _comparison(full, dev),
             "params": params, "converged": bool(fit["converged"])}
+    if extra:
+        doc["deviation"] = extra
+    return doc
+
+
+def _second_deviation(y, fs, options) -> dict | None:
+    """The ``kind``/``bias_corrected`` options (module doc): None for the plain OADEV."""
+    kind = str(options.get("kind", "oadev"))
+    flag = options.get("bias_corrected", False)
+    if isinstance(flag, str):
+        if flag.lower() not in ("true", "false", "1", "0", "yes", "no"):
+            raise FogbayesError(f"bias_corrected={flag!r} is not true or false",
+                                column="bias_corrected", fix="give bias_corrected=true or false")
+        flag = flag.lower() in ("true", "1", "yes")
+    if kind == "oadev" and not flag:
+        return None
+    dev = allan_deviation(y, fs, taus=options.get("taus", "octave"), kind=kind, ci=CI,
+                          per_decade=int(options.get("per_decade", 20)),
+                          bias_corrected=bool(flag))
+    return {"kind": dev.kind, "bias_corrected": bool(flag), "tau": dev.tau, "dev": dev.dev,
+            "dev_low": dev.dev_low, "dev_high": dev.dev_high, "edf": dev.edf,
+            "alpha": dev.alpha, "n_terms": dev.n_terms, "note": dev.note}
 
 
 def compensate_recording(rec, fit: dict) -> dict:

@@ -20,6 +20,9 @@ from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OP
 from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, fit_channels
 
 _TAUS = ("octave", "decade", "dense", "all")
+_KINDS = ("oadev", "adev", "mdev", "tdev", "ohdev", "hdev", "totdev", "mtotdev", "ttotdev",
+          "htotdev", "theo1")
+_BIASED = ("totdev", "htotdev", "theo1")
 
 
 def summary_lines(doc: dict) -> list[str]:
@@ -27,6 +30,13 @@ def summary_lines(doc: dict) -> list[str]:
     fit = doc["fit"]
     out = [f"allan: n={doc['n']} fs={doc['fs']:g} Hz, {len(doc['tau'])} taus, "
            f"fit={fit['method']} converged={fit['converged']}"]
+    extra = doc.get("deviation")
+    if extra:
+        bc = ", bias-corrected" if extra["bias_corrected"] else ""
+        unit = "deg/h*s" if extra["kind"] in ("tdev", "ttotdev") else "deg/h"
+        out.append(f"  {extra['kind']}{bc}: {len(extra['tau'])} taus, "
+                   f"{extra['dev'][0]:.4g} {unit} at tau {extra['tau'][0]:.4g} s ... "
+                   f"{extra['dev'][-1]:.4g} at {extra['tau'][-1]:.4g} s (under 'deviation')")
     for t in ("Q", "N", "B", "K", "R"):
         e = fit["terms"].get(t)
         if e is None:
@@ -61,6 +71,15 @@ def allan(
     json_out: str = typer.Option(..., "--json", help="Result document to write ('-' = stdout)."),
     taus: str = typer.Option("octave", help="Tau grid: octave | decade | dense | all."),
     per_decade: int = typer.Option(20, help="Points per decade of the dense grid."),
+    kind: str = typer.Option(
+        "oadev", "--kind",
+        help="Also compute this deviation, stored under 'deviation' with 90 % intervals (the "
+             "noise fit stays on the OADEV): " + " | ".join(_KINDS) + ". htotdev (Hadamard "
+             "total) ignores a rate ramp; theo1 reports tau = 0.75 m tau0."),
+    bias_corrected: bool = typer.Option(
+        False, "--bias-corrected",
+        help="With --kind " + ", ".join(_BIASED) + ": remove the estimator's bias for the "
+             "identified noise type (Stable32's HTOTDEV factors; Theo1 to the Allan variance)."),
     bayes: bool = typer.Option(False, "--bayes",
                                help="NumPyro posterior with term selection (slower)."),
     seed: int = typer.Option(0, help="Seed of the posterior sampler."),
@@ -112,6 +131,14 @@ def allan(
         from ..inference.datasheet import read_prior
 
         sheet = read_prior(prior)
+    if kind not in _KINDS:
+        raise FogbayesError(f"unknown deviation '{kind}'", column="--kind",
+                            fix=f"use one of {', '.join(_KINDS)}")
+    if bias_corrected and kind not in _BIASED:
+        raise FogbayesError(f"--bias-corrected applies to {', '.join(_BIASED)}, not {kind}",
+                            column="--bias-corrected",
+                            fix=f"add --kind {_BIASED[1]} (or another of them), or leave "
+                                "--bias-corrected out")
     if taus not in _TAUS:
         raise FogbayesError(f"unknown tau grid '{taus}'", column="--taus",
                             fix=f"use one of {', '.join(_TAUS)}")
@@ -129,7 +156,8 @@ def allan(
     docs, doc = fit_channels(
         rec, axis, column, load_kw,
         lambda r: fit_recording(r, model="allan", bayes=bayes, seed=seed, taus=taus,
-                                per_decade=per_decade, prior=sheet),
+                                per_decade=per_decade, prior=sheet, kind=kind,
+                                bias_corrected=bias_corrected),
         "Allan deviation and noise fit" + (" (posterior)" if bayes else ""))
     write_json(doc, json_out)
     for name, one in docs.items():

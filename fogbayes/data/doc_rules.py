@@ -49,7 +49,7 @@ TOP_LEVEL_KEYS = {
                             "table", "table_markdown", "residual_rate_rms", "product"},
     "allan": _COMMON | {"sensor_id", "source", "n", "fs", "unit", "input_unit", "ci", "taus",
                         "gaps", "tau", "adev", "adev_low", "adev_high", "edf", "alpha",
-                        "n_terms", "fit", "comparison", "params"},
+                        "n_terms", "fit", "comparison", "params", "deviation"},
     "arma": _COMMON | {"sign_convention", "statsmodels_equivalent", "unit", "n", "decimate",
                        "sample_rate_hz", "detrend_order", "criterion", "selected",
                        "selected_aic", "selected_bic", "candidates", "params", "whiteness",
