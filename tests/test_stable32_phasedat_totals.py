@@ -153,3 +153,13 @@ def test_htotdev_intervals_with_stable32_alpha(name):
     assert (np.sqrt(vhi) >= hi)[fallback].all() and (np.sqrt(vlo) <= lo)[fallback].all()
     flicker = alpha == 1  # Table 5 (Stein) for flicker PM: 2.7e-3 at m = 128, 1.4e-2 at 256
     assert np.max(err[flicker], initial=0) < 2e-2
+
+
+def test_htotdev_nist_sp1065_nbs14_values():
+    """NIST SP 1065 (Riley 2008), its table for the 1 000-point NBS14 frequency data
+    (PHASE.DAT is its cumulative sum): HTOTDEV 2.943883e-01 at tau = 1 (the OHDEV there) and 9.614787e-02 at
+    tau = 10 (bias-corrected for the white FM both identify). Measured: 1.0e-7 relative at
+    tau = 10 (the 7th printed digit)."""
+    res = allan_deviation(_rate(), 1.0, taus=[1, 10], kind="htotdev", bias_corrected=True)
+    assert res.alpha.tolist() == [0, 0]
+    np.testing.assert_allclose(res.dev, [2.943883e-01, 9.614787e-02], rtol=1e-6)
