@@ -221,7 +221,8 @@ def _second_deviation(y, fs, options) -> dict | None:
     if isinstance(flag, str):
         if flag.lower() not in ("true", "false", "1", "0", "yes", "no"):
             raise FogbayesError(f"bias_corrected={flag!r} is not true or false",
-                                column="bias_corrected", fix="give bias_corrected=true or false")
+                                column="bias_corrected",
+                                fix="give --option bias_corrected=true (or false)")
         flag = flag.lower() in ("true", "1", "yes")
     if kind == "oadev" and not flag:
         return None
