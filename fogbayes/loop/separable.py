@@ -172,7 +172,8 @@ def separability_warnings(rows: list[dict], rms: float) -> list[str]:
             walk.append(r)
     if walk:
         walk.sort(key=lambda r: -r["detectable_deg_h"])
-        sizes = "; ".join(f"{WHAT[r['effect']]} up to {r['detectable_deg_h']:.3g} deg/h "
+        sizes = "; ".join(f"{WHAT[r['effect']]} ({r['effect']}) up to "
+                          f"{r['detectable_deg_h']:.3g} deg/h "
                           f"({r['detectable_without_walk_deg_h']:.3g} without the walk)"
                           for r in walk)
         out.append(f"this record's random walk hides slow effects larger than its residual "
