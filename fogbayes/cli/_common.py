@@ -329,7 +329,9 @@ def refuse_overwrite(inputs: dict[str, Any], outputs: dict[str, Any]) -> None:
     seen_out: dict = {}
     for flag, out in ((n, p) for n, v in outputs.items() for p in _paths(v)):
         keys = _keys(out)
-        alt = out.with_name(f"{out.stem}_out{out.suffix}")
+        # the suggestion keeps the kind the flag writes (--json rec.csv -> rec_out.json)
+        suffix = {"--json": ".json", "--report": ".html"}.get(flag, out.suffix)
+        alt = out.with_name(f"{out.stem}_out{suffix}")
         hit = next((seen_in[k] for k in keys if k in seen_in), None)
         how = "is"
         if hit is None and keys[0] in holders:
