@@ -3,7 +3,8 @@
 Every subcommand lives in its own module and registers itself on :data:`app`. ``main``
 turns a :class:`~fogbayes.errors.FogbayesError` (bad input) into one line on stderr and
 exit code 2, never a traceback. SIGTERM is turned into ``SystemExit(143)`` while a command
-runs (as Ctrl-C is into ``KeyboardInterrupt``), so that the atomic writers of
+runs, and SIGINT (Ctrl-C) into ``SystemExit(130)`` with one line ``fogbayes: interrupted``,
+so that the atomic writers of
 :mod:`fogbayes.data.atomic` remove their temporary files: a killed command leaves the old
 output or none, never a truncated one.
 """
@@ -51,11 +52,28 @@ def _terminated(signum, frame):
     raise Terminated(128 + signum)
 
 
+class Interrupted(SystemExit):
+    """Raised by the SIGINT (Ctrl-C) handler: the command unwinds and exits with 128 + 2 = 130.
+
+    A ``SystemExit`` rather than ``KeyboardInterrupt`` so that click does not turn it into its
+    own "Aborted!" block: the user reads one line, ``fogbayes: interrupted``.
+    """
+
+
+def _interrupted(signum, frame):
+    """SIGINT: unwind like SIGTERM (cleanup and ``finally`` blocks run), exit 130."""
+    from ..data.atomic import request_stop
+
+    request_stop(128 + signum)
+    raise Interrupted(128 + signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``fogbayes`` script; returns the exit code."""
-    installed, previous = False, None
+    installed, previous, previous_int = False, None, None
     if threading.current_thread() is threading.main_thread():
         previous, installed = signal.signal(signal.SIGTERM, _terminated), True
+        previous_int = signal.signal(signal.SIGINT, _interrupted)
     try:
         # standalone mode: click prints usage errors itself and exits with code 2.
         app(args=argv, prog_name="fogbayes", standalone_mode=True)
@@ -67,8 +85,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"fogbayes: error: {where}{exc.strerror or exc}. Fix: check the path and its "
               "folder's permissions", file=sys.stderr)
         return 2
+    except Interrupted as exc:
+        print("fogbayes: interrupted; unfinished outputs were not written", file=sys.stderr)
+        return exc.code
     except SystemExit as exc:
-        if isinstance(exc, (Terminated, Stopped)):
+        if isinstance(exc, Stopped) and exc.code == 130:  # Ctrl-C while a file was written
+            print("fogbayes: interrupted; unfinished outputs were not written", file=sys.stderr)
+        elif isinstance(exc, (Terminated, Stopped)):
             print("fogbayes: terminated (SIGTERM); unfinished outputs were not written",
                   file=sys.stderr)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
@@ -76,6 +99,8 @@ def main(argv: list[str] | None = None) -> int:
         clear_stop()
         if installed:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+            signal.signal(signal.SIGINT,
+                          signal.default_int_handler if previous_int is None else previous_int)
     return 0
 
 
