@@ -17,11 +17,20 @@ from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
 
 
 def _read_json(path: Path, what: str) -> dict:
+    """The JSON object at ``path``; one line naming the file if unreadable or not an object."""
+    fix = f"pass the file written by 'fogbayes {what} --json'"
     try:
-        return json.loads(Path(path).read_text())
-    except (OSError, json.JSONDecodeError) as exc:
+        doc = json.loads(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise FileFormatError(f"cannot read the {what} JSON ({exc})", file=str(path),
-                              fix=f"pass the file written by 'fogbayes {what} --json'") from None
+                              fix=fix) from None
+    except (RecursionError, ValueError) as exc:  # nesting beyond the parser's stack; huge ints
+        raise FileFormatError(f"cannot parse the {what} JSON ({type(exc).__name__}: nested "
+                              "too deep or numbers too long)", file=str(path), fix=fix) from None
+    if not isinstance(doc, dict):
+        raise FileFormatError(f"the {what} JSON is a {type(doc).__name__}, not an object with "
+                              "fields", file=str(path), fix=fix)
+    return doc
 
 
 @app.command()
