@@ -36,3 +36,14 @@ def test_report_loop_given_deep_nesting_is_one_line(tmp_path):
     assert res.returncode == 2, res.stderr
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "deep.json" in lines[0], res.stderr
+
+
+def test_loop_noise_prior_given_deep_nesting_is_one_line(tmp_path):
+    _rec(tmp_path)
+    (tmp_path / "deep.json").write_text("[" * 100_000 + "]" * 100_000)
+    res = _run(tmp_path, "loop", "rec.csv", "-m", "allan", "--noise-prior", "deep.json",
+               "--json", "l.json", "--compensated", "c.csv")
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "deep.json" in lines[0], res.stderr
+    assert "Traceback" not in res.stderr

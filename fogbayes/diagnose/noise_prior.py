@@ -122,6 +122,9 @@ def read_noise_prior(path: str | Path) -> NoisePrior:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         raise FogbayesError(f"the noise prior is not a JSON document ({e})", file=str(path),
                             fix=HOW) from None
+    except (RecursionError, ValueError) as e:  # nesting beyond the parser's stack; huge ints
+        raise FogbayesError(f"the noise prior cannot be parsed ({type(e).__name__}: nested too "
+                            "deep or numbers too long)", file=str(path), fix=HOW) from None
     return prior_from_doc(doc, source=str(path))
 
 
