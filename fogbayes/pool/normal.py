@@ -126,8 +126,10 @@ class PoolResult(NamedTuple):
 LINEAR_POWER = 2.0
 #: exponent cap of the censored likelihood: beyond it the likelihood is below exp(-1e3)
 _MAX_EXPONENT = 60.0
-#: least share of the ceiling left to the other terms (v_hat <= (1 - this) S)
-_MIN_REST = 1e-3
+#: least share of the ceiling left to the other terms (v_hat <= (1 - this) S): a smaller
+#: share makes a sharp knee in the likelihood where the sampler diverged (1 in 4000 draws, 4 of
+#: 20 pools of four 1 h units at 1e-3); it caps the level's fall at log(0.05)^2 / var
+_MIN_REST = 0.05
 
 
 def censored_shift(theta, y, ceiling):
@@ -332,7 +334,7 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
     covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
     ``censored`` (U, P) marks components a unit does not resolve: y is then its estimate,
     ``ceiling`` (U, P) the log of the value at which the term alone is the unit's measured
-    AVAR (required with ``censored``; raised to keep a 0.1 % share for the other terms) and
+    AVAR (required with ``censored``; raised to keep a _MIN_REST share for the other terms) and
     cov's block of them the covariance of their shifts x (:func:`censored_shift`, module
     docstring); their covariances with resolved components are ignored.
     ``mu_prior``: ``(mean (P,), sd (P,))`` of the normal prior on mu (a datasheet), or None.
