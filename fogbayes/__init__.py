@@ -2,7 +2,7 @@
 
 Importing fogbayes turns on JAX float64 (see :mod:`fogbayes._config`). Beside load, save
 and Recording it offers fit, compensate, run_loop, allan_deviation
-(:mod:`fogbayes.workflow.api`) and report (:mod:`fogbayes.report`), imported on first use.
+(:mod:`fogbayes.workflow.api`) and report (:func:`fogbayes.workflow.report.report`), imported on first use.
 """
 
 from . import _config  # noqa: F401  (float64 on before any JAX array is made)
@@ -22,8 +22,7 @@ def __getattr__(name: str):
         import importlib
 
         module, attr = LAZY[name]
-        value = importlib.import_module(module)  # attr None: the (callable) module itself
-        value = value if attr is None else getattr(value, attr)
+        value = getattr(importlib.import_module(module), attr)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'fogbayes' has no attribute {name!r}")

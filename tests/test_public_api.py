@@ -45,10 +45,10 @@ def test_every_public_name_resolves_and_no_subpackage_is_shadowed():
     import pkgutil
 
     subpackages = {m.name for m in pkgutil.iter_modules(fogbayes.__path__)}
-    # fogbayes.report is its own package, made callable: importing a submodule keeps it so
-    assert set(fogbayes.__all__) & subpackages == {"report"}
-    importlib.import_module("fogbayes.report.sections")
-    assert callable(fogbayes.report)
+    # no public name is a subpackage: importing fogbayes.x.y would rebind fogbayes.x
+    assert set(fogbayes.__all__) & subpackages == set()
+    importlib.import_module("fogbayes.render.sections")
+    assert fogbayes.report.__module__ == "fogbayes.workflow.report"
     for name in fogbayes.__all__:
         assert getattr(fogbayes, name) is not None
     assert importlib.import_module("fogbayes.simulate").simulate is simulate

@@ -1,4 +1,4 @@
-"""The bias-stability intervals of the reports (fogbayes.report.bootstrap) and the number format.
+"""The bias-stability intervals of the reports (fogbayes.render.bootstrap) and the number format.
 
 Coverage is measured on series whose true bias stability is known: the std of the window
 means of a stationary process. 200 repetitions at a nominal 90 %: the binomial standard
@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.report.bootstrap import (block_length, paired_interval, single_stability,
+from fogbayes.render.bootstrap import (block_length, paired_interval, single_stability,
                                        stability_interval, std_interval)
-from fogbayes.report.html import fmt, fmt_pct
+from fogbayes.render.html import fmt, fmt_pct
 
 REPS = 200
 BAND = (0.84, 0.96)

@@ -2,7 +2,7 @@
 
 Three report types: the demo report (``fogbayes demo``), the calibration report of a fit
 (``fogbayes fit`` + ``fogbayes report --fit``) and the closed-loop report
-(:func:`fogbayes.report.loop.loop_report`, what ``fogbayes loop --report`` writes; run here
+(:func:`fogbayes.render.loop.loop_report`, what ``fogbayes loop --report`` writes; run here
 with one step and few null simulations to stay fast). Each is rendered without console
 errors, screenshotted (into docs/screenshots/<type>.png with
 FOGBAYES_UPDATE_SCREENSHOTS=1: the screenshots in the docs are the ones these tests take), and its headline block -- the first section -- is read back
@@ -67,7 +67,7 @@ def fit_report(demo_report, tmp_path_factory):
 def loop_report(demo_report, tmp_path_factory):
     from fogbayes.data import load
     from fogbayes.loop import run_loop
-    from fogbayes.report.loop import loop_report
+    from fogbayes.render.loop import loop_report
 
     d = tmp_path_factory.mktemp("loop")
     rec = load(demo_report.parent / "demo_recording.csv")

@@ -16,7 +16,7 @@ def test_median_interval_is_the_binomial_order_statistic_interval():
     (true median 1) is at least 90 % (Monte Carlo, 4000 sets: s.e. 0.5 %)."""
     from scipy.stats import binom
 
-    from fogbayes.report.composite import median_interval
+    from fogbayes.render.composite import median_interval
 
     rng = np.random.default_rng(3)
     for n in (5, 12, 140):
@@ -84,7 +84,7 @@ def test_composite_report_has_a_coefficient_table_with_intervals(composite_repor
 def test_composite_verdict_gives_each_median_its_interval(composite_report):
     """The ppm verdict: median [low, high] before -> after, each interval around its
     median and equal to the order-statistic interval of the cells' |error| in ppm."""
-    from fogbayes.report.composite import median_interval
+    from fogbayes.render.composite import median_interval
 
     doc, page = composite_report
     verdict = H.unescape(re.search(r"Verdict:</b>(.*?)</p>", page, flags=re.S).group(1))

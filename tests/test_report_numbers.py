@@ -133,9 +133,9 @@ def test_residual_std_label_says_per_sample():
     deg/h fitted on 1 s means it is 0.5 (block means scatter by 0.5 / sqrt(10) = 0.16),
     and the report's label says per sample."""
     from fogbayes.data import Metadata, Recording
-    from fogbayes.report.html import render
-    from fogbayes.report.labels import label
-    from fogbayes.report.sections import model_section
+    from fogbayes.render.html import render
+    from fogbayes.render.labels import label
+    from fogbayes.render.sections import model_section
     from fogbayes.thermal.workflow import fit_recording
 
     rng = np.random.default_rng(5)
@@ -195,10 +195,10 @@ def _step_phrase_numbers(res):
 def test_loop_verdict_states_the_step_size_time_and_units(step_loop):
     """The headline verdict names the step's size ± s.e. in deg/h and its time (it said
     "added step (time)"); the fitted size lies within 5 s.e. of the planted one."""
-    from fogbayes.report.effects import effect_phrase
-    from fogbayes.report.html import fmt
-    from fogbayes.report.loop import loop_headline
-    from fogbayes.report.html import render
+    from fogbayes.render.effects import effect_phrase
+    from fogbayes.render.html import fmt
+    from fogbayes.render.loop import loop_headline
+    from fogbayes.render.html import render
 
     tr, res = step_loop
     size, se, t_s = _step_phrase_numbers(res)
@@ -217,7 +217,7 @@ def test_loop_cli_result_line_states_the_effect(step_loop, tmp_path, monkeypatch
     import fogbayes
     import fogbayes.loop
     from fogbayes.cli import main
-    from fogbayes.report.html import fmt
+    from fogbayes.render.html import fmt
 
     tr, res = step_loop
     csv = tmp_path / "step.csv"
@@ -240,8 +240,8 @@ def test_report_of_a_loop_calibration_shows_the_loop_reports_numbers(step_loop, 
     import json
     import html as H
 
-    from fogbayes.report.calibration import physical_rows
-    from fogbayes.report.effects import effect_phrase
+    from fogbayes.render.calibration import physical_rows
+    from fogbayes.render.effects import effect_phrase
     from fogbayes.workflow.report import build_report
 
     tr, res = step_loop

@@ -127,13 +127,13 @@ def loop(
     if json_out != "-":
         say(f"wrote {compensated}")
     if report is not None:
-        from ..report.loop import loop_report
+        from ..render.loop import loop_report
 
         loop_report(res, report, title=f"Closed loop: {rec_path.name}", rec=rec)
         say(f"wrote {report}")
     if prior is not None:
         say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")
-    from ..report.effects import effect_phrase
+    from ..render.effects import effect_phrase
 
     added = "; ".join(effect_phrase(s.effect, s.detail, s.covariates) for s in res.steps) or "nothing"
     reason = res.stop.reason

@@ -165,7 +165,7 @@ def pool(
         return
     _say_allan(pools)
     if report is not None:
-        from ..report.pool import write_pool_report
+        from ..render.pool import write_pool_report
 
         write_pool_report(doc, report)
         say(f"wrote {report}")

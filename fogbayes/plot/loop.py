@@ -1,5 +1,5 @@
 """Figures of the closed loop: the story, step by step (its report section is
-:mod:`fogbayes.report.loop`).
+:mod:`fogbayes.render.loop`).
 
 For every added effect: the residual of the model *before* the step (10 s block means)
 against time with the added term's fitted contribution on top, and the same residual

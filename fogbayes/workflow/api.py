@@ -69,10 +69,9 @@ def run_loop(rec, *, model: str = "bias-t", **options):
     return run_loop(rec, model, **options)
 
 
-#: name -> (module, attribute) of the flat API (attribute None: the module itself)
+#: name -> (module, attribute) of the flat API
 LAZY = {"fit": ("fogbayes.workflow.api", "fit"),
         "compensate": ("fogbayes.workflow.api", "compensate"),
         "run_loop": ("fogbayes.workflow.api", "run_loop"),
         "allan_deviation": ("fogbayes.stats.allan", "allan_deviation"),
-        # the package fogbayes.report, callable: fogbayes.report(rec, doc, "report.html")
-        "report": ("fogbayes.report", None)}
+        "report": ("fogbayes.workflow.report", "report")}

@@ -79,10 +79,10 @@ def _summary(rec, fits, stability, report) -> str:
 
 def _write_report(path, rec, sim, fits, comp, adev, oracle):
     from ..plot.demo import plot_adev_compare, plot_compensation
-    from ..report import sections as S
-    from ..report.bootstrap import stability_intervals
-    from ..report.headline import headline_section, improvement_verdict, model_line
-    from ..report.html import Section, fmt, fmt_pct, write
+    from ..render import sections as S
+    from ..render.bootstrap import stability_intervals
+    from ..render.headline import headline_section, improvement_verdict, model_line
+    from ..render.html import Section, fmt, fmt_pct, write
     from .report import covariates
 
     import dataclasses

@@ -4,9 +4,10 @@
 (or takes a fit document), compensates, runs the Allan analysis on what is left,
 collects the covariates for the residual plots, tells the n-sigma flags that are gross
 errors from the noise's own tail (:func:`gross_errors`) and computes the headline's
-bias-stability intervals (:mod:`fogbayes.report.bootstrap`). ``fogbayes.report`` renders.
+bias-stability intervals (:mod:`fogbayes.render.bootstrap`). :mod:`fogbayes.render` renders.
+:func:`report` is ``fogbayes.report(...)``: the same report from Python.
 
-Every report opens with the headline (:mod:`fogbayes.report.headline`): what was
+Every report opens with the headline (:mod:`fogbayes.render.headline`): what was
 calibrated, the model, bias stability before -> after with 90 % block-bootstrap
 intervals, the improvement with its interval, and a verdict.
 """
@@ -14,11 +15,62 @@ intervals, the improvement with its interval, and a verdict.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import FogbayesError
 from . import workflow_for
+
+
+def report(rec, fit: dict | str | Path | None = None, out: str | Path = "report.html", *,
+           model: str | None = None, loop=None, bayes: bool = False, seed: int = 0,
+           title: str | None = None, allan: bool = True, pdf: str | Path | None = None) -> Path:
+    """Write the self-contained HTML report of ``rec`` to ``out`` and return its path.
+
+    Args:
+        rec: a :class:`~fogbayes.data.Recording`, or the path of a recording file (read
+            with the defaults of :func:`fogbayes.load`).
+        fit: a fit document (``fogbayes.fit`` / ``fogbayes fit --json``), a loop document
+            (``fogbayes loop --json``: its calibration applied to ``rec``), a multi-axis
+            noise document, or the path of one; validated as ``fogbayes report --fit`` does.
+        model: fit this model first when ``fit`` is None (``bias-t``, ``thermal``,
+            ``composite``, ``allan``); with ``bayes`` its posterior intervals.
+        loop: a :class:`fogbayes.loop.LoopResult` (``fogbayes.run_loop``) told step by step.
+        allan: add the Allan analysis of what the model leaves (default on).
+        pdf: also print the report to this PDF (headless Chromium).
+
+    Raises the errors ``fogbayes report`` turns into one line: a
+    :class:`~fogbayes.errors.FogbayesError` naming the document or recording and the fix.
+    """
+    if isinstance(rec, (str, Path)):
+        from ..data import load
+
+        rec = load(rec)
+    doc: Any = fit
+    if isinstance(fit, (str, Path)):
+        from ..data.documents import read_calibration
+
+        doc = read_calibration(fit)
+    elif isinstance(fit, dict):
+        from ..data.axes_doc import is_axes_document
+        from ..data.doc_rules import is_loop_document
+        from ..support.jsonable import to_jsonable
+
+        doc = to_jsonable(fit)
+        if is_loop_document(doc):
+            from ..loop.calibration_doc import validate_loop_document
+
+            doc = validate_loop_document(doc)
+        elif not is_axes_document(doc):
+            from ..data.documents import validate_in_memory
+
+            validate_in_memory(doc)
+    path = build_report(rec, out, model=model, fit=doc, loop=loop, bayes=bayes, seed=seed,
+                        title=title, allan=allan)
+    if pdf is not None:
+        print_pdf(path, pdf)
+    return path
 
 
 def covariates(rec) -> dict[str, np.ndarray]:
@@ -49,8 +101,8 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
         fit: a fit document already computed (``fogbayes fit --json``); wins over ``model``.
         loop: a :class:`fogbayes.loop.LoopResult` whose story is told step by step.
     """
-    from ..report import sections as S
-    from ..report.html import write
+    from ..render import sections as S
+    from ..render.html import write
 
     from ..data.doc_rules import is_loop_document
 
@@ -93,7 +145,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
         if table is not None:
             parts.append(table)
     if loop is not None:
-        from ..report.loop import loop_section
+        from ..render.loop import loop_section
 
         parts.append(loop_section(loop))
     allan_doc = fit if fit is not None and fit.get("model") == "allan" else None
@@ -115,8 +167,8 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
 
 def _axes_report(rec, out, doc: dict, *, title) -> Path:
     """A multi-axis noise document: the recording, then one noise section per axis."""
-    from ..report import sections as S
-    from ..report.html import write
+    from ..render import sections as S
+    from ..render.html import write
 
     if doc["model"] != "allan":
         raise FogbayesError(f"a multi-axis {doc['model']!r} document has no report yet",
@@ -153,9 +205,9 @@ def gross_errors(residual: np.ndarray, flagged: np.ndarray, k: float = GROSS_SIG
 def _loop_calibration_report(rec, out, doc, *, seed, title, allan) -> Path:
     """A loop document's calibration applied to ``rec``: headline, what was applied,
     recording, residual, noise of the calibrated output."""
-    from ..report import calibration as C
-    from ..report import sections as S
-    from ..report.html import write
+    from ..render import calibration as C
+    from ..render import sections as S
+    from ..render.html import write
 
     applied, residual = C.apply_loop_document(rec, doc)
     outliers = np.asarray(applied.columns["outlier"], bool)
@@ -180,7 +232,7 @@ def _loop_calibration_report(rec, out, doc, *, seed, title, allan) -> Path:
 
 def _intervals(rec, residual, det) -> dict:
     """Window (s) -> bootstrap StabilityInterval of the whole record, raw vs compensated."""
-    from ..report.bootstrap import stability_intervals
+    from ..render.bootstrap import stability_intervals
 
     out = {}
     for row in det["metrics"].get("full", {}).get("stability", []):
@@ -195,7 +247,7 @@ def _intervals(rec, residual, det) -> dict:
 
 def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
     """The headline section: the model fitted, the loop, or the noise alone."""
-    from ..report.headline import headline_section, improvement_verdict, model_line
+    from ..render.headline import headline_section, improvement_verdict, model_line
 
     if det is not None and intervals:
         si = intervals[min(intervals)]
@@ -213,10 +265,10 @@ def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
     if det is not None:  # composite: the relative rate error of the calibration table
         return _composite_headline(rec, det)
     if loop is not None:
-        from ..report.loop import loop_headline
+        from ..render.loop import loop_headline
 
         return loop_headline(loop, rec)
-    from ..report.bootstrap import single_stability
+    from ..render.bootstrap import single_stability
 
     try:
         single = single_stability(residual_rec.rate("deg/h"), residual_rec.time)
@@ -233,14 +285,14 @@ def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
 
 
 def _fmt(v):
-    from ..report.html import fmt
+    from ..render.html import fmt
 
     return fmt(v)
 
 
 def _composite_headline(rec, det):
-    from ..report.composite import error_verdict
-    from ..report.headline import headline_section, model_line
+    from ..render.composite import error_verdict
+    from ..render.headline import headline_section, model_line
 
     table = det.get("table")
     verdict, ok = "", None

@@ -39,7 +39,7 @@ def physical_rows(cal: dict) -> list[tuple[str, str, str, str]]:
     c_k z^k = c_k s^-k sum_j binom(k, j) (-c)^(k-j) T^j, so a = A beta and the standard
     errors are sqrt(diag(A Cov A^T)) from the document's covariance. Every other term is
     read by its kind (:func:`fogbayes.diagnose.terms.describe`), the phrase of the loop
-    report (:func:`fogbayes.report.effects.effect_phrase`).
+    report (:func:`fogbayes.render.effects.effect_phrase`).
     """
     from math import comb
 

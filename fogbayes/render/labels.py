@@ -1,7 +1,7 @@
 """Human labels for the raw keys of fit documents, and the units of coefficients.
 
 A report shows ``label(key)`` in the table and keeps the raw key as the cell's tooltip
-(:class:`fogbayes.report.html.Cell`), so a reader who wants the JSON field still finds it.
+(:class:`fogbayes.render.html.Cell`), so a reader who wants the JSON field still finds it.
 Keys that are sentences rather than numbers (``stderr_note``) are notes, not table rows.
 """
 

@@ -76,7 +76,7 @@ def loop_headline(res, rec=None):
 
 
 def loop_section(res):
-    """A :class:`~fogbayes.report.html.Section` telling the loop's story."""
+    """A :class:`~fogbayes.render.html.Section` telling the loop's story."""
     from ..loop.noise_model import sentence as noise_model_sentence
     from .html import Cell, Section, fmt
 

@@ -2,7 +2,7 @@
 
 Each function takes a Recording and/or a result document (the JSON written by
 ``fogbayes fit``, ``fogbayes allan`` or ``fogbayes loop``) and returns a
-:class:`~fogbayes.report.html.Section`. Nothing here fits or estimates anything.
+:class:`~fogbayes.render.html.Section`. Nothing here fits or estimates anything.
 """
 
 from __future__ import annotations
@@ -175,7 +175,7 @@ MIN_MEANS_FOR_INTERVAL = 50  # fewer window means: no bootstrap interval is show
 def stability_section(doc: dict, intervals: dict | None = None) -> Section:
     """Bias stability before/after: whole record per window, then per segment (paper 004).
 
-    ``intervals``: window (s) -> :class:`fogbayes.report.bootstrap.StabilityInterval` of
+    ``intervals``: window (s) -> :class:`fogbayes.render.bootstrap.StabilityInterval` of
     the whole record (computed by the caller); shown where they rest on at least
     ``MIN_MEANS_FOR_INTERVAL`` window means.
     """

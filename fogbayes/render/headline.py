@@ -3,7 +3,7 @@
 The reader who receives a report first wants: which sensor and file, over what span and
 temperatures; which model; bias stability before -> after with its uncertainty, the
 improvement with its uncertainty; and a one-line verdict. This module renders that block
-from numbers already computed (:mod:`fogbayes.report.bootstrap` intervals); the
+from numbers already computed (:mod:`fogbayes.render.bootstrap` intervals); the
 ``<span>`` classes (``bs before``, ``ci before-ci``, ...) are what tests read back.
 """
 
