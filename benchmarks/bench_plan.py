@@ -64,7 +64,7 @@ def record(mix: str, n: int, seed: int) -> np.ndarray:
     fs, p = MIXES[mix]
     span = 1 << (4 * n - 1).bit_length()
     return (quantization_noise(n, fs, seed=seed, Q=p["Q"]) + white_noise(n, fs, seed=seed, N=p["N"])
-            + flicker_noise(span, fs, seed=seed, B=p["B"])[:n]
+            + flicker_noise(span, fs, seed=seed, B=p["B"], span=1)[:n]
             + random_walk_noise(n, fs, seed=seed, K=p["K"]))
 
 

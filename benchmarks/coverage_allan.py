@@ -5,9 +5,9 @@ For each noise mix and record length, simulate many records with
 count how often the 90 % interval of each parameter contains the truth; compare the RMS
 relative error of the fitted values with that of the IEEE-952 slope readouts.
 
-The simulator's flicker (bias-instability) noise has no power below 1/T (T its length), which
-a real sensor has; we therefore simulate 4 x the record and keep the first quarter, so the
-kept record's flicker noise has its low-frequency content (see RESULTS_allan.md).
+The simulator's flicker (bias-instability) noise has no power below 1/(4T) (T its length);
+the records here are cut from 4 x longer draws, so the flicker reaches down to 1/(16 T), as
+a real sensor's does (see RESULTS_allan.md).
 
     python benchmarks/coverage_allan.py --methods wls --seeds 200
     python benchmarks/coverage_allan.py --methods bayes --seeds 40 --out cov.json

@@ -49,7 +49,7 @@ def unit(job: tuple[int, int, float]) -> list[float]:
                    ).recording
     n, s = rec.n, 777_000 + seed
     noise = (white_noise(n, 1.0, seed=s, N=0.005) + random_walk_noise(n, 1.0, seed=s, K=0.02)
-             + flicker_noise(span * n, 1.0, seed=s, B=0.02)[:n])
+             + flicker_noise(span * n, 1.0, seed=s, B=0.02, span=1)[:n])
     ctx = make_context(dataclasses.replace(rec, output=np.asarray(rec.output) + noise))
     terms = base_terms(ctx, "bias-t", "2")
     fit = fit_terms(ctx, terms, spec=ns.make_spec(ctx.grid.dt, ctx.cov.duration,

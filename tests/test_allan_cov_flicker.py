@@ -11,8 +11,8 @@ overlapping AVAR estimates of a record cut from it has an independent closed for
     H_m(w) = (e^{i w m} - 1)^2 / (e^{i w} - 1),
 
 one inverse FFT for all lags, summed over every lag with its pair count (no stride). The
-benchmarks simulate 4x the record and keep the first part (benchmarks/coverage_allan.py);
-this is the setting checked here, down to the longest octave (m = n/4).
+simulator draws 4x the record and keeps the first part (``span=4``); this is the setting
+checked here, down to the longest octave (m = n/4).
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def test_flicker_covariance_matches_the_simulator_exactly(grid):
     mean, cov = (np.asarray(a) for a in mixture_moments(T, s))
     exact = spectral_covariance(ms, n, 4 * n)
     # means: the model's flat (2 ln2 / pi) B^2 against the generator's exact expectation
-    np.testing.assert_allclose(mean, flicker_avar(ms, 4 * n, FS, B=B), rtol=0.01)
+    np.testing.assert_allclose(mean, flicker_avar(ms, n, FS, B=B, span=4), rtol=0.01)
     # sds within 1 % and correlations within 0.01 at every octave, the longest (the strided
     # lag sums: 2000 grid points for ~16000 lags) included. Measured: mean ratios 0.991-1.005,
     # sd ratios 0.995-1.005, correlations within 0.008 (largest at m = 8).
@@ -95,10 +95,10 @@ def test_spectral_reference_matches_monte_carlo():
     ms = np.array([4, 16, 64, 256, 512])
     from fogbayes.stats.allan_kernels import allan_variance
 
-    Y = np.stack([flicker_noise(4 * n, FS, seed=s, B=B)[:n] for s in range(reps)])
+    Y = np.stack([flicker_noise(n, FS, seed=s, B=B, span=4) for s in range(reps)])
     V = np.asarray(allan_variance(Y, tuple(int(m) for m in ms))[0])
     exact = spectral_covariance(ms, n, 4 * n)
-    np.testing.assert_allclose(V.mean(0), flicker_avar(ms, 4 * n, FS, B=B), rtol=0.1)
+    np.testing.assert_allclose(V.mean(0), flicker_avar(ms, n, FS, B=B, span=4), rtol=0.1)
     # MC se of an sd with 600 records: ~3 % (more at the longest tau, few independent terms)
     assert np.all(np.abs(V.std(0) / np.sqrt(np.diag(exact)) - 1) < 0.12)
     assert np.max(np.abs(np.corrcoef(V.T) - _corr(exact))) < 0.1

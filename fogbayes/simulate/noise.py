@@ -18,11 +18,13 @@ How each term is made (all vectorised: cumsum, FFT, lfilter; no per-sample Pytho
   Exact for every cluster time tau = m / fs: sigma^2 = 3 Q^2 / tau^2.
 * angle random walk N: white rate noise of std N_s sqrt(fs). Exact: sigma^2 = N_s^2 / tau.
 * bias instability B: FFT-shaped flicker (1/f) noise with one-sided PSD S(f) = B^2 / (pi f)
-  on the Fourier bins 1/T ... fs/2 (random phases and Gaussian amplitudes, no DC).
-  Its ADEV is 0.664 B within 1.5 % for 4/fs <= tau <= T/20 (T = n/fs the record length);
-  it is 4 % high at tau = 2/fs and 9 % high (0.724 B) at tau = 1/fs (the sampled 1/f
-  spectrum), and falls below the floor past T/10 (no power below 1/T).
-  :func:`flicker_avar` gives the exact expected Allan variance of this generator at any m.
+  on the Fourier bins 1/(span T) ... fs/2 of a record ``span`` times longer (random phases
+  and Gaussian amplitudes, no DC), of which the first T is kept. A periodic record
+  (span 1) would force a full cycle of period T into every realisation: against a chamber
+  programme that heats then cools, that sine is a hysteresis loop. Its ADEV is 0.664 B
+  within 1.5 % for 4/fs <= tau <= T/20; it is 4 % high at tau = 2/fs and 9 % high
+  (0.724 B) at tau = 1/fs (the sampled 1/f spectrum). :func:`flicker_avar` gives the exact
+  expected Allan variance of this generator at any m.
 * rate random walk K: a Brownian motion of intensity K_s averaged over each sample interval
   (an integrating gyro), drawn exactly (joint Gaussian of interval increment and interval
   mean), so sigma^2 = K_s^2 tau / 3 holds exactly at tau = m / fs.
@@ -61,38 +63,43 @@ def quantization_noise(n: int, fs: float, *, seed: int, Q: float) -> np.ndarray:
     return np.diff(e) * fs
 
 
-def flicker_noise(n: int, fs: float, *, seed: int, B: float) -> np.ndarray:
-    """Bias instability as 1/f noise: one-sided PSD S(f) = B^2 / (pi f), f = k fs / n.
+def flicker_noise(n: int, fs: float, *, seed: int, B: float, span: int = 4) -> np.ndarray:
+    """Bias instability as 1/f noise: one-sided PSD S(f) = B^2 / (pi f), f = k fs / L,
+    the first ``n`` samples of a periodic sequence of length L = span n (module doc).
 
     For a flat one-sided PSD h/f the Allan variance is 2 ln2 h = (2 ln2 / pi) B^2, i.e.
     ADEV 0.664 B. numpy's irfft gives bin k the variance 2 E|X_k|^2 / n^2, so
     E|X_k|^2 = S(f_k) fs n / 2 puts S(f_k) fs / n (the PSD times the bin width) in bin k.
     """
     n, fs, B = positive_int(n, "n"), positive(fs, "fs"), positive(B, "B", allow_zero=True)
+    span = positive_int(span, "span")
     if B == 0.0 or n < 2:
         return np.zeros(n)
     rng = _rng(seed, "B")
-    k = np.arange(1, n // 2 + 1)
-    psd = B * B / (math.pi * (k * fs / n))
-    amp = np.sqrt(psd * fs * n / 4.0)  # std of real and of imaginary part
-    spec = np.zeros(n // 2 + 1, dtype=complex)
+    L = span * n
+    k = np.arange(1, L // 2 + 1)
+    psd = B * B / (math.pi * (k * fs / L))
+    amp = np.sqrt(psd * fs * L / 4.0)  # std of real and of imaginary part
+    spec = np.zeros(L // 2 + 1, dtype=complex)
     spec[1:] = amp * (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size))
-    if n % 2 == 0:  # the Nyquist bin is real and covers half a bin width: S fs / (2 n)
+    if L % 2 == 0:  # the Nyquist bin is real and covers half a bin width: S fs / (2 L)
         spec[-1] = math.sqrt(2.0) * amp[-1] * rng.standard_normal()
-    return np.fft.irfft(spec, n)
+    return np.fft.irfft(spec, L)[:n]
 
 
-def flicker_avar(m, n: int, fs: float, *, B: float) -> np.ndarray:
+def flicker_avar(m, n: int, fs: float, *, B: float, span: int = 4) -> np.ndarray:
     """Exact expected Allan variance of :func:`flicker_noise` at cluster sizes ``m``.
 
     The generator is a stationary Gaussian sequence, a sum of independent random-phase
-    cosines at f_k = k fs / n with variances v_k = S(f_k) fs / n (half that at Nyquist).
+    cosines at f_k = k fs / L (L = span n) with variances v_k = S(f_k) fs / L (half that at
+    Nyquist); keeping the first n samples leaves its expectation unchanged.
     For one cosine the m-sample mean has amplitude ratio sin(m w/2) / (m sin(w/2)) and the
     difference of adjacent means a further 2 sin(m w/2), w = 2 pi f / fs, so
 
         AVAR(m) = sum_k 2 v_k sin^4(pi f_k m / fs) / (m^2 sin^2(pi f_k / fs)).
     """
     m = np.atleast_1d(np.asarray(m, dtype=float))
+    n = span * n
     k = np.arange(1, n // 2 + 1)
     f = k * fs / n
     var_k = B * B / (math.pi * f) * fs / n
