@@ -272,9 +272,9 @@ def fit_channels(rec: Path, axis: str | None, column: str, load_kw: dict, fit,
     return docs, axes_document(docs, source=str(rec))
 
 
-def write_json(obj: Any, out: Path | str) -> None:
+def write_json(obj: Any, out: Path | str, tell: bool = True) -> None:
     """Write ``obj`` as JSON to ``out``, atomically (:mod:`fogbayes.data.atomic`); ``-``
-    means stdout."""
+    means stdout. ``tell``: say "wrote OUT" on stderr."""
     from ..data.atomic import write_text
 
     text = json.dumps(to_jsonable(obj), indent=2)
@@ -282,7 +282,8 @@ def write_json(obj: Any, out: Path | str) -> None:
         sys.stdout.write(text + "\n")
     else:
         write_text(out, text + "\n")
-        say(f"wrote {out}")
+        if tell:
+            say(f"wrote {out}")
 
 
 class OverwriteError(FogbayesError):
@@ -309,9 +310,16 @@ def _keys(p: Path) -> list:
     return keys
 
 
-def refuse_overwrite(inputs: dict[str, Any], outputs: dict[str, Any]) -> None:
+#: The kind of file an output flag writes, whatever its path says (for suggested names).
+_SUFFIX = {"--json": ".json", "--report": ".html", "--compensated": ".csv", "--pdf": ".pdf"}
+
+
+def refuse_overwrite(inputs: dict[str, Any], outputs: dict[str, Any],
+                     folders: tuple[str, ...] = ()) -> None:
     """Refuse an output that is an input of the same command, a folder holding one, or the
-    same file as another output -- before any work, so the input is never touched.
+    same file as another output -- before any work, so the input is never touched -- and
+    one that could not be written (:func:`check_outputs`), so that a command's outputs
+    appear all or none: no output is written when another would fail after the work.
 
     ``inputs`` and ``outputs`` map a name for people (``"the recording"``, ``"--json"``) to a
     path, a list of paths, ``None`` or ``"-"`` (stdout: skipped). Paths are compared after
@@ -330,7 +338,7 @@ def refuse_overwrite(inputs: dict[str, Any], outputs: dict[str, Any]) -> None:
     for flag, out in ((n, p) for n, v in outputs.items() for p in _paths(v)):
         keys = _keys(out)
         # the suggestion keeps the kind the flag writes (--json rec.csv -> rec_out.json)
-        suffix = {"--json": ".json", "--report": ".html"}.get(flag, out.suffix)
+        suffix = _SUFFIX.get(flag, out.suffix)
         alt = out.with_name(f"{out.stem}_out{suffix}")
         hit = next((seen_in[k] for k in keys if k in seen_in), None)
         how = "is"
@@ -348,6 +356,31 @@ def refuse_overwrite(inputs: dict[str, Any], outputs: dict[str, Any]) -> None:
                                  fix=f"give {flag} another path, e.g. {alt}")
         for key in keys:
             seen_out.setdefault(key, flag)
+    check_outputs(outputs, folders)
+
+
+def check_outputs(outputs: dict[str, Any], folders: tuple[str, ...] = ()) -> None:
+    """Refuse, before any work, an output path its writer would fail on after the work: an
+    existing folder where a file is written (a flag in ``folders`` writes a folder), a path
+    under a file, a folder that cannot be written to
+    (:func:`fogbayes.data.atomic.check_writable`). One probe per folder (a batch names
+    thousands of outputs in one folder). ``outputs`` as :func:`refuse_overwrite`'s."""
+    from ..data.atomic import check_writable
+
+    probed: set = set()
+    for flag, out in ((n, p) for n, v in outputs.items() for p in _paths(v)):
+        if out.parent in probed and not out.exists():
+            continue
+        try:
+            check_writable(out, folder=flag in folders)
+        except FogbayesError as exc:
+            if flag.startswith("-"):  # name the option that takes another path
+                exc.fix = (f"give {flag} a file inside it, e.g. {out / ('out' + _SUFFIX.get(flag, ''))}"
+                           if exc.problem.startswith("is a folder") else
+                           f"give {flag} another path, in a folder you can write to")
+                exc.args = (exc._compose(),)
+            raise
+        probed.add(out.parent)
 
 
 def say(msg: str) -> None:
@@ -358,11 +391,14 @@ def say(msg: str) -> None:
 
 @contextmanager
 def progress(description: str, total: int | None = None):
-    """A rich progress bar on stderr (silent with --quiet); yields an ``advance`` callable."""
+    """A rich progress bar on stderr; yields an ``advance`` callable.
+
+    Silent with --quiet and when stderr is not a terminal: a bar drawn into a file or a pipe
+    leaves an empty line behind, and an error must then be the one line on stderr."""
     from rich.progress import (BarColumn, Progress, SpinnerColumn, TextColumn,
                                TimeElapsedColumn)
 
-    if QUIET["on"]:
+    if QUIET["on"] or not console.is_terminal:  # a log or a pipe reads lines, not a bar
         yield lambda n=1: None
         return
     cols = [SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn()]

@@ -104,7 +104,7 @@ def batch(
     files = find_recordings(folder, pattern)  # bad folder/pattern: exit 2 right away
     n_files = len(files)
     refuse_overwrite({"a recording": files},
-                     {"--json": json_out,
+                     {"--out": Path(out) / "summary.json", "--json": json_out,
                       "a per-recording output": [Path(out) / f"{f.stem}{sfx}" for f in files
                                                  for sfx in OUTPUT_SUFFIXES.get(task, ())]})
     with progress(f"{task} {model}: {n_files} recordings [{where}]", total=n_files) as advance:

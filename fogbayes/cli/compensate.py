@@ -185,11 +185,13 @@ def compensate(
       fogbayes compensate next_run.csv -p loop.json -o comp.csv --json summary.json
     """
     from ..data import write_csv_mixed
+    from ..data.atomic import all_or_none
     from ..errors import FogbayesError, about_file
     from ..workflow import workflow_for
 
     refuse_overwrite({"the recording": rec, "the --params document": params},
-                     {"--out": out, "--json": json_out})
+                     {"--out": out, "--json": json_out},
+                     folders=("--out",) if stream else ())  # --stream may write a folder
     fit_doc = read_fit(params)
     from ..data.axes_doc import is_axes_document
     from ..data.documents import agreed_unit, check_channels
@@ -239,8 +241,9 @@ def compensate(
             temperature=temperature, input_rate=input_rate, time_unit=time_unit,
             temperature_scale=temperature_scale, temperature_offset=temperature_offset,
             topic=topic, instance=instance, axis=axis)
-        compensate_with_loop(fit_doc, recording, rec_path=rec, params=params, out=out,
-                             json_out=json_out, run_events=run_events)
+        with all_or_none():  # --out and --json appear both or neither
+            compensate_with_loop(fit_doc, recording, rec_path=rec, params=params, out=out,
+                                 json_out=json_out, run_events=run_events)
         return
     if run_events:
         raise FogbayesError("--run-events applies to loop documents only", column="--run-events",
@@ -278,11 +281,15 @@ def compensate(
                                temperature_offset=temperature_offset,
                                topic=topic, instance=instance, axis=axis)
     check_channels(fit_doc, str(params), recording)
-    with progress(f"compensating {recording.n} samples ({fit_doc['model']})"), about_file(rec):
-        cols = wf.compensate_recording(recording, fit_doc)
-        write_csv_mixed(out, cols)
+    with all_or_none():  # --out and --json appear both or neither
+        with progress(f"compensating {recording.n} samples ({fit_doc['model']})"), \
+                about_file(rec):
+            cols = wf.compensate_recording(recording, fit_doc)
+            write_csv_mixed(out, cols)
+        if json_out:
+            write_json(summary(recording, fit_doc, cols, rec_path=rec, params=params, out=out),
+                       json_out, tell=False)
     n_out = int(cols["outlier"].sum()) if "outlier" in cols else 0
     say(f"wrote {out}: {len(cols['time'])} rows, {n_out} flagged as outliers")
-    if json_out:
-        write_json(summary(recording, fit_doc, cols, rec_path=rec, params=params, out=out),
-                   json_out)
+    if json_out and json_out != "-":
+        say(f"wrote {json_out}")

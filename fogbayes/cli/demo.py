@@ -43,7 +43,7 @@ def demo(
     """
     from ..workflow.demo import run_demo
 
-    refuse_overwrite({}, {"the report": out / "report.html",
+    refuse_overwrite({}, {"--out": out / "report.html",  # first: a bad folder names --out
                           "the recording": out / "demo_recording.csv", "--json": json_out})
     with progress("fogbayes demo", total=5) as advance:
         def step(msg):

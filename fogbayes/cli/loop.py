@@ -1,11 +1,14 @@
-"""``fogbayes loop REC --model NAME --json OUT --compensated OUT.csv``: the closed loop.
+"""``fogbayes loop REC --model NAME [--json OUT] [--compensated OUT.csv] [--report OUT.html]``:
+the closed loop.
 
 Fits the named model, traces what its residual holds to the candidate effects the model
 lacks, adds the one the evidence supports, refits, and repeats (at most ``--max-steps``).
-Writes the docs/DESIGN.md JSON (before/after metrics, one entry per added effect with its
-evidence, and ``unexplained`` structure), the compensated CSV (every input row: ``time``,
-``output`` in the input unit -- or ``rate`` in deg/s for ``composite`` --, ``outlier``) and,
-with ``--report``, an HTML report that tells the story step by step.
+Writes the outputs asked for, and only those (at least one): with ``--json`` the
+docs/DESIGN.md JSON (before/after metrics, one entry per added effect with its evidence, and
+``unexplained`` structure), with ``--compensated`` the compensated CSV (every input row:
+``time``, ``output`` in the input unit -- or ``rate`` in deg/s for ``composite`` --,
+``outlier``), with ``--report`` an HTML report that tells the story step by step. Every
+output path is checked before the loop runs, so that they appear all or none.
 """
 
 from __future__ import annotations
@@ -48,11 +51,15 @@ def loop(
     rec_path: Path = REC_ARG,
     model: str = typer.Option(..., "--model", "-m",
                               help="Base model: bias-t | thermal | composite | allan."),
-    json_out: str = typer.Option(..., "--json", help="Loop document to write ('-' = stdout)."),
-    compensated: Path = typer.Option(..., "--compensated",
+    json_out: str = typer.Option(None, "--json", show_default=False,
+                                 help="Loop document to write ('-' = stdout). Not written "
+                                      "unless asked for, as --compensated and --report; "
+                                      "give at least one."),
+    compensated: Path = typer.Option(None, "--compensated", show_default=False,
                                      help="Compensated CSV to write (every input row)."),
     max_steps: int = typer.Option(5, "--max-steps", min=0, help="Add at most this many effects."),
-    report: Path = typer.Option(None, "--report", help="Also write an HTML report of the loop."),
+    report: Path = typer.Option(None, "--report", show_default=False,
+                                help="HTML report of the loop to write."),
     orders: str = typer.Option(None, "--orders", "--order",
                                help="Base orders: bias-t 'n' (default 2); thermal 'n' or "
                                     "'n,m' (T, dT/dt; default 2); composite "
@@ -83,7 +90,10 @@ def loop(
 
     Each step adds the candidate effect (temperature rate, gradient, hysteresis, time drift, step, periodic, ...) that the evidence supports, calibrated so that clean data adds nothing; structure no candidate explains is listed as unexplained.
 
+    Writes what --json, --compensated and --report ask for (at least one), nothing else.
+
     Examples:
+      fogbayes loop chamber.csv -m bias-t --report loop.html
       fogbayes loop chamber.csv --model bias-t --json loop.json \\
           --compensated comp.csv --report loop.html
       fogbayes loop table.csv -m composite --max-steps 3 \\
@@ -93,12 +103,18 @@ def loop(
       fogbayes loop chamber.csv -m bias-t --noise-prior static.json \\
           --json loop.json --compensated comp.csv
     """
+    from ..data.atomic import all_or_none
     from ..data.io import write_csv_mixed
     from ..errors import FogbayesError, TooShortError, about_file
     from ..loop import run_loop
 
     refuse_overwrite({"the recording": rec_path, "the --noise-prior document": noise_prior},
                      {"--json": json_out, "--compensated": compensated, "--report": report})
+    if json_out is None and compensated is None and report is None:
+        raise FogbayesError("nothing to write: the loop writes what --json, --compensated "
+                            "and --report ask for", column="--report",
+                            fix=f"add e.g. --report {rec_path.stem}_loop.html (or --json "
+                                "loop.json, --compensated comp.csv)")
     if not 0.0 < alpha < 0.5:
         raise FogbayesError(f"alpha={alpha} is outside (0, 0.5)", column="--alpha",
                             fix="use e.g. --alpha 0.01")
@@ -122,15 +138,18 @@ def loop(
     with progress(f"closed loop on {rec_path.name} ({model})"), about_file(rec_path):
         res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed,
                        noise_prior=prior)
-    write_json(res.to_json(), json_out)
-    write_csv_mixed(compensated, res.compensated)
-    if json_out != "-":
-        say(f"wrote {compensated}")
-    if report is not None:
-        from ..render.loop import loop_report
+    with all_or_none():  # a report that fails leaves no JSON or CSV behind
+        if report is not None:
+            from ..render.loop import loop_report
 
-        loop_report(res, report, title=f"Closed loop: {rec_path.name}", rec=rec)
-        say(f"wrote {report}")
+            loop_report(res, report, title=f"Closed loop: {rec_path.name}", rec=rec)
+        if compensated is not None:
+            write_csv_mixed(compensated, res.compensated)
+        if json_out is not None:
+            write_json(res.to_json(), json_out, tell=False)
+    for out in (json_out, compensated, report):
+        if out is not None and str(out) != "-":
+            say(f"wrote {out}")
     if prior is not None:
         say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")
     from ..render.effects import effect_phrase

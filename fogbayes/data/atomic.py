@@ -11,6 +11,9 @@ temporary file is removed and the final name is left as it was: the old file, or
 Only SIGKILL or a power cut can leave a ``.*.tmp-*`` file behind, never a truncated file
 under the final name.
 
+A command with several outputs writes them inside :func:`all_or_none`: their renames wait
+until the last is written, so that a failure on any leaves none of them.
+
 Folders (the ``--stream`` output of one ``<column>.npy`` per column) go through
 :func:`atomic_dir`: written as a whole in a temporary folder beside the target, then
 renamed into place. An existing target folder is replaced only when it holds nothing but
@@ -133,13 +136,100 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         _fsync(tmp)
         if _STOP["code"] is not None:  # stopped while writing: never rename a doubtful file
             raise Stopped(_STOP["code"])
-        if path.is_file():  # keep the permissions of the file replaced
-            shutil.copymode(path, tmp)
-        os.replace(tmp, path)
+        if _BATCH["files"] is not None:  # inside all_or_none(): renamed when it ends
+            _BATCH["files"].append((tmp, path))
+            return
+        _rename(tmp, path)
+    except OSError as exc:
+        _remove(tmp)
+        if _names(exc, tmp):  # the user named ``path``, never the hidden temporary
+            raise unwritable(path, exc) from None
+        raise
     except BaseException:
         _remove(tmp)
         raise
     _fsync_dir(path.parent)
+
+
+def _rename(tmp: Path, path: Path) -> None:
+    if path.is_file():  # keep the permissions of the file replaced
+        shutil.copymode(path, tmp)
+    os.replace(tmp, path)
+
+
+#: The files written inside :func:`all_or_none`, (temporary, final) in order; None outside.
+_BATCH: dict = {"files": None}
+
+
+@contextmanager
+def all_or_none() -> Iterator[None]:
+    """Hold back the renames of every :func:`atomic_path` write inside the block until it
+    ends: then all are renamed into place; on an exception (Ctrl-C and SIGTERM included)
+    none is, and their temporary files are removed -- a command's outputs appear all or
+    none. Inside the block a file written is not yet under its final name: not for code
+    that reads back what it wrote. Nested blocks join the outermost one.
+    """
+    if _BATCH["files"] is not None:
+        yield
+        return
+    _BATCH["files"] = []
+    try:
+        yield
+        if _STOP["code"] is not None:
+            raise Stopped(_STOP["code"])
+        files = _BATCH["files"]
+        _BATCH["files"] = None
+        for k, (tmp, path) in enumerate(files):
+            try:
+                _rename(tmp, path)
+            except OSError as exc:
+                for left, _ in files[k:]:
+                    _remove(left)
+                raise unwritable(path, exc) from None
+        for folder in {path.parent for _, path in files}:
+            _fsync_dir(folder)
+    except BaseException:
+        for tmp, _ in _BATCH["files"] or []:
+            _remove(tmp)
+        raise
+    finally:
+        _BATCH["files"] = None
+
+
+def _names(exc: OSError, tmp: Path) -> bool:
+    """Whether ``exc`` is about the temporary ``tmp`` (its file name, or its name in the
+    message of a writer that does not set ``filename``)."""
+    return any(str(f) == str(tmp) for f in (exc.filename, exc.filename2) if f) or \
+        tmp.name in str(exc)
+
+
+def check_writable(path: str | Path, *, folder: bool = False) -> None:
+    """Raise the one-line error :func:`atomic_path` (or, ``folder``, :func:`atomic_dir`)
+    would raise for ``path`` only after the work: ``path`` an existing folder where a file is
+    written, a file where a folder should be, or a folder that cannot be written to.
+
+    Checked by doing what the writer does first: a hidden temporary file is created (and
+    removed at once) in the nearest existing folder on the way to ``path`` -- permission
+    bits alone do not tell (root, read-only file systems, ACLs). Creates nothing that stays.
+    """
+    path = Path(path)
+    if path.is_dir() and not folder:
+        raise FileFormatError("is a folder, not a file", file=str(path),
+                              fix="name a file inside it, or another path")
+    if path.exists() and not path.is_file() and not path.is_dir():
+        return  # a device or a pipe: written directly
+    where = path.parent
+    while not where.exists() and where != where.parent:
+        where = where.parent
+    if not where.is_dir():
+        raise unwritable(path, NotADirectoryError(20, "Not a directory"))
+    probe = temp_path(where / path.name)
+    try:
+        fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+    except OSError as exc:
+        raise unwritable(path, exc) from None
+    os.close(fd)
+    _remove(probe)
 
 
 def unwritable(path: Path, exc: OSError) -> FileFormatError:
@@ -200,9 +290,12 @@ def atomic_dir(path: str | Path) -> Iterator[Path]:
     """
     path = Path(path)
     check_replaceable_dir(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = temp_path(path)
-    tmp.mkdir()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.mkdir()
+    except OSError as exc:
+        raise unwritable(path, exc) from None
     old = None
     try:
         yield tmp
