@@ -220,6 +220,11 @@ def fit(
             say(tag + gls_line(one))
         else:
             say(tag + summary_line(one))
+            if bayes:  # asked for the posterior: say it, not only the least-squares line
+                from .fit_summary import posterior_lines
+
+                for line in posterior_lines(one):
+                    say(tag + line)
         for warning in one.get("warnings") or []:  # e.g. not identifiable, gross errors
             say(f"{tag}warning: {warning}")
     converged = [one.get("calibration", {}).get("noise", {}).get("converged", False) if gls
