@@ -34,6 +34,7 @@ def _root(quiet: bool = typer.Option(False, "--quiet", "-q",
 from . import allan, arma, batch, compensate, demo, export, fit, info, loop, plan, plan_chamber, pool, prior, report, simulate  # noqa: E402,F401
 
 _common.add_reading_options(app)  # every reader has every reading option
+_common.no_typer_path_checks(app)  # an unreadable input: one line, not click's usage box
 
 
 class Terminated(SystemExit):

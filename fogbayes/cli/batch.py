@@ -19,7 +19,7 @@ from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SC
                       TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, refuse_overwrite, say,
                       write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import added_reading_options
+from ._common import added_reading_options, check_inputs
 
 _EPILOG = """Examples:
 
@@ -101,6 +101,7 @@ def batch(
                       load=load, bayes=bayes, max_steps=max_steps, alpha=alpha,
                       params=_calibration(params, task, model, vectorize))
     where = f"dask ({address or f'local cluster, {workers} workers'})" if engine == "dask" else engine
+    check_inputs({"the recordings folder": folder})  # unreadable: say so, not "no match"
     files = find_recordings(folder, pattern)  # bad folder/pattern: exit 2 right away
     n_files = len(files)
     refuse_overwrite({"a recording": files},
