@@ -429,6 +429,12 @@ def say(msg: str) -> None:
         console.print(msg, markup=False, highlight=False, soft_wrap=True)
 
 
+def shows_progress() -> bool:
+    """Whether progress is drawn: not with --quiet, and only on a terminal (a log file or a
+    pipe reads lines; a bar drawn there leaves an empty line before the next one)."""
+    return not QUIET["on"] and console.is_terminal
+
+
 @contextmanager
 def progress(description: str, total: int | None = None):
     """A rich progress bar on stderr; yields an ``advance`` callable.
@@ -438,7 +444,7 @@ def progress(description: str, total: int | None = None):
     from rich.progress import (BarColumn, Progress, SpinnerColumn, TextColumn,
                                TimeElapsedColumn)
 
-    if QUIET["on"] or not console.is_terminal:  # a log or a pipe reads lines, not a bar
+    if not shows_progress():
         yield lambda n=1: None
         return
     cols = [SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn()]

@@ -20,9 +20,10 @@ import typer
 from ._app import app
 from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
                       SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      progress, refuse_overwrite, say, write_json)
+                      refuse_overwrite, say, write_json)
 from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
 from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
+from .loop_progress import loop_progress
 
 #: Fewer samples than this give a loop without power that looks like a clean result:
 #: refused (the residual whiteness tests use up to 20 lags, 5 samples a lag).
@@ -135,7 +136,7 @@ def loop(
                             f"{rec.n}", file=str(rec_path),
                             fix=f"give a recording of {LOOP_MIN_SAMPLES} samples or more "
                                 "(effects need several cycles of their driver: hours of data)")
-    with progress(f"closed loop on {rec_path.name} ({model})"), about_file(rec_path):
+    with loop_progress(f"loop {rec_path.name}", max_steps), about_file(rec_path):
         res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed,
                        noise_prior=prior)
     with all_or_none():  # a report that fails leaves no JSON or CSV behind

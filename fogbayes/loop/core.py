@@ -52,6 +52,7 @@ from .compensate import compensate
 from .describe import describe
 from .metrics import Metrics, block_rms, stability
 from . import holdout
+from .progress import tell
 from .noise_model import best_with_fewer, choose as choose_noise, components
 from .ranking import alternatives, duel_json, rank_supported, supported_trials
 from .result import LoopResult, Rejected, Step
@@ -239,6 +240,7 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
     cands = candidates_for(ctx, fit.terms, effects=opts.effects)
     if not cands:
         return None, None, {"reason": "no candidate left"}
+    tell(step + 1, opts.max_steps, f"screening {len(cands)} candidates")
     pairs = _screen_all(ctx, fit, cands, opts, step, cache)
     screened = [p[0] for p in pairs]
     n_cand = len(screened)
@@ -246,9 +248,16 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
         return None, None, {"reason": "no identifiable candidate"}
     ranking = _ranking(screened, n_cand)
     short = pairs[:opts.n_refit]
-    trials = sorted((t for t in (_safe_trial(ctx, fit, wm, s, n_cand, alpha=opts.alpha,
-                                             seed=opts.seed + 7919 * step + 17)
-                                 for s, wm in short) if t is not None), key=lambda t: t.log_p)
+
+    def trial(i, s, wm):
+        tell(step + 1, opts.max_steps, f"refitting {s.candidate.effect}",
+             s.candidate.effect, i + 1, len(short))
+        return _safe_trial(ctx, fit, wm, s, n_cand, alpha=opts.alpha,
+                           seed=opts.seed + 7919 * step + 17)
+
+    trials = sorted((t for t in (trial(i, s, wm) for i, (s, wm) in enumerate(short))
+                     if t is not None), key=lambda t: t.log_p)
+    tell(step + 1, opts.max_steps, "weighing the evidence")
     supported = supported_trials(ctx, fit, trials, opts, n_cand, cache)
     if not supported:
         best = trials[0] if trials else None
@@ -289,6 +298,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     allowed = tuple(e for e in ALLOWED[model] if effects is None or e in effects) \
         if model in ALLOWED else effects
     opts = Options(max_steps, alpha, n_sims, n_refit, seed, allowed, target_blocks)
+    tell(0, max_steps, f"fitting the {model} base")
     ctx = make_context(rec, target_blocks=target_blocks)
     base = base_terms(ctx, model, orders, source=rec.meta.source)
     fit = fit_terms(ctx, base)
@@ -298,6 +308,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     markov = allowed is None or "markov_noise" in allowed
     noise_rows: list[dict] = []
     if markov:
+        tell(0, max_steps, "choosing the noise model")
         fit, noise_rows = choose_noise(ctx, fit, alpha=alpha)
     fit0 = fit
     cache: dict = {}
@@ -312,11 +323,13 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
             stop = Rejected(why["reason"], why.get("best") or {})
             break
         s = tr.screened
+        tell(k + 1, max_steps, f"adding {s.candidate.effect}", s.candidate.effect)
         new = polish(ctx, fit, tr.fit)  # a step's time, or a searched scale, under the refit
         rows: list[dict] = []
         if markov:
             new, rows = choose_noise(ctx, new, alpha=alpha,
                                      after=f"+ {s.candidate.effect}")
+        tell(k + 1, max_steps, f"held-out check of {s.candidate.effect}", s.candidate.effect)
         h_new = holdout.score(ctx, new, search=holdout.searched_columns(ctx, s.candidate, new))
         cmp = holdout.compare(h_new, h_cur)
         evid["holdout"] = holdout.to_json(cmp)
@@ -333,6 +346,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
                           cur.rms, m1.rms, m1, new))
         fit, cur = new, m1
         h_cur = holdout.score(ctx, fit)  # the next term is judged with this one held fixed
+    tell(None, max_steps, "scanning the residual for unexplained structure")
     unexplained = scan_unexplained(ctx, fit, seed=seed, alpha=alpha)
     # what the final model could still be missing on this programme and noise
     detectable = tuple(detectability(ctx, fit, alpha, effects=opts.effects)) \
