@@ -184,3 +184,22 @@ def test_a_write_refused_by_the_folder_names_the_users_path(read_only):
     msg = str(info.value)
     assert msg.startswith(f"{read_only / 'c.csv'}: cannot write here"), msg
     assert ".tmp-" not in msg, msg
+
+
+@pytest.mark.parametrize("command, module, name", [
+    ("allan", "fogbayes.plot.allan", "allan_figure"),
+    ("arma", "fogbayes.plot.arma", "analysis_figure"),
+])
+def test_a_figure_that_fails_leaves_no_json(files, tmp_path, capsys, monkeypatch, command,
+                                            module, name):
+    """allan/arma --json J --plot P: the figure fails after the JSON was written: no J."""
+    import importlib
+
+    def broken(*args, **kwargs):
+        raise FogbayesError("the figure failed", file="a.png")
+
+    monkeypatch.setattr(importlib.import_module(module), name, broken)
+    code, err = _run(["-q", command, files / "rec.csv", "--json", tmp_path / "a.json",
+                      "--plot", tmp_path / "a.png"], capsys)
+    assert code == 2 and err == ["fogbayes: error: a.png: the figure failed"], err
+    assert list(tmp_path.iterdir()) == []

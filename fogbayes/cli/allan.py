@@ -116,7 +116,7 @@ def allan(
     document holds one Allan document per axis under "axes" (docs/logs.md).
     """
     from ..errors import FogbayesError
-    from ..data.atomic import atomic_path
+    from ..data.atomic import all_or_none, atomic_path
     from ..allan.workflow import fit_recording
 
     refuse_overwrite({"the recording": rec, "the --prior document": prior},
@@ -159,14 +159,16 @@ def allan(
                                 per_decade=per_decade, prior=sheet, kind=kind,
                                 bias_corrected=bias_corrected),
         "Allan deviation and noise fit" + (" (posterior)" if bayes else ""))
-    write_json(doc, json_out)
+    with all_or_none():  # --json and --plot appear both or neither
+        write_json(doc, json_out)
+        if plot is not None:
+            from ..plot.allan import allan_figure
+
+            fig = allan_figure(doc)
+            with atomic_path(plot) as tmp:  # the suffix is kept: PNG or PDF from the name
+                fig.savefig(tmp, dpi=150)
     for name, one in docs.items():
         for line in summary_lines(one):
             say(line if name is None else f"[{name}] {line}")
     if plot is not None:
-        from ..plot.allan import allan_figure
-
-        fig = allan_figure(doc)
-        with atomic_path(plot) as tmp:  # the suffix is kept: PNG or PDF from the name
-            fig.savefig(tmp, dpi=150)
         say(f"wrote {plot}")

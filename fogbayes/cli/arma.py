@@ -53,7 +53,7 @@ def arma(
       fogbayes arma static.csv --candidates grid --criterion aic --json arma.json
       fogbayes -q arma static.csv --output-unit deg/s --json - > arma.json
     """
-    from ..data.atomic import atomic_path
+    from ..data.atomic import all_or_none, atomic_path
     from ..errors import ArgumentError, about_file
     from ..arma.workflow import analyse_recording
 
@@ -79,12 +79,14 @@ def arma(
                                    bayes=bayes, seed=seed)
     doc = result.document
     doc["file"] = str(rec_path)
-    write_json(doc, json_out)
-    if plot is not None:
-        from ..plot.arma import analysis_figure
+    with all_or_none():  # --json and --plot appear both or neither
+        write_json(doc, json_out)
+        if plot is not None:
+            from ..plot.arma import analysis_figure
 
-        with atomic_path(plot) as tmp:  # the suffix is kept: the format from the name
-            analysis_figure(result).savefig(tmp, dpi=120)
+            with atomic_path(plot) as tmp:  # the suffix is kept: the format from the name
+                analysis_figure(result).savefig(tmp, dpi=120)
+    if plot is not None:
         say(f"wrote {plot}")
     w = doc["whiteness"]
     say(f"selected {doc['selected']} by {criterion.upper()}; converged={doc['converged']}; "

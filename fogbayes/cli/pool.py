@@ -159,15 +159,19 @@ def pool(
                 if model == "bias-t" else
                 pool_allan(units, terms=chosen, seed=seed, flag_level=flag_level, prior=sheet))
     doc = pool_document(pools, model=model)
-    write_json(doc, json_out)
+    from ..data.atomic import all_or_none
+
+    with all_or_none():  # --json and --report appear both or neither
+        write_json(doc, json_out)
+        if report is not None and model != "bias-t":
+            from ..render.pool import write_pool_report
+
+            write_pool_report(doc, report)
     if model == "bias-t":
         _say_thermal(pools)
         return
     _say_allan(pools)
     if report is not None:
-        from ..render.pool import write_pool_report
-
-        write_pool_report(doc, report)
         say(f"wrote {report}")
 
 
