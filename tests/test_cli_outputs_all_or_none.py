@@ -203,3 +203,39 @@ def test_a_figure_that_fails_leaves_no_json(files, tmp_path, capsys, monkeypatch
                       "--plot", tmp_path / "a.png"], capsys)
     assert code == 2 and err == ["fogbayes: error: a.png: the figure failed"], err
     assert list(tmp_path.iterdir()) == []
+
+
+FAKE_CHROMIUM = """#!/bin/sh
+# prints the page it is given (a file:// URI, the last argument) as its 'PDF'
+for a in "$@"; do
+  case "$a" in --print-to-pdf=*) out="${a#--print-to-pdf=}";; esac
+  last="$a"
+done
+/bin/cat "${last#file://}" > "$out"
+"""
+
+
+def test_report_pdf_is_printed_from_the_html_and_both_appear(files, tmp_path, capsys,
+                                                             monkeypatch):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "chromium").write_text(FAKE_CHROMIUM)
+    (bin_dir / "chromium").chmod(0o755)
+    monkeypatch.setenv("PATH", str(bin_dir))
+    out = tmp_path / "out"
+    code, err = _run(["-q", "report", files / "rec.csv", "--fit", files / "allan.json",
+                      "--out", out / "r.html", "--pdf", out / "r.pdf"], capsys)
+    assert code == 0, err
+    html = (out / "r.html").read_bytes()
+    assert html.startswith(b"<!") and (out / "r.pdf").read_bytes() == html
+    assert sorted(p.name for p in out.iterdir()) == ["r.html", "r.pdf"]
+
+
+def test_report_without_a_pdf_printer_writes_no_html(files, tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no chromium here
+    out = tmp_path / "out"
+    out.mkdir()
+    code, err = _run(["-q", "report", files / "rec.csv", "--fit", files / "allan.json",
+                      "--out", out / "r.html", "--pdf", out / "r.pdf"], capsys)
+    assert code == 2 and len(err) == 1 and "Chromium" in err[0], err
+    assert list(out.iterdir()) == []

@@ -91,14 +91,21 @@ def report(
                          temperature_offset=temperature_offset,
                          topic=topic, instance=instance, axis=axis)
     loop_res = None
-    with progress("building the report"), about_file(rec_path):
-        if loop_json:
-            from ..loop import run_loop
+    from ..data.atomic import all_or_none, pending
 
-            doc = _read_json(loop_json, "loop")
-            loop_res = run_loop(rec, doc.get("model", model or "bias-t"),
-                                max_steps=max(1, len(doc.get("steps", [])) or 1), seed=seed)
-        path = build_report(rec, out, model=model, fit=fit_doc, loop=loop_res, bayes=bayes, seed=seed)
+    with all_or_none():  # --out and --pdf appear both or neither
+        with progress("building the report"), about_file(rec_path):
+            if loop_json:
+                from ..loop import run_loop
+
+                doc = _read_json(loop_json, "loop")
+                loop_res = run_loop(rec, doc.get("model", model or "bias-t"),
+                                    max_steps=max(1, len(doc.get("steps", [])) or 1),
+                                    seed=seed)
+            path = build_report(rec, out, model=model, fit=fit_doc, loop=loop_res,
+                                bayes=bayes, seed=seed)
+        if pdf:
+            print_pdf(pending(path), pdf)  # from the HTML not yet renamed into place
     say(f"wrote {path}")
     if pdf:
-        say(f"wrote {print_pdf(path, pdf)}")
+        say(f"wrote {pdf}")

@@ -196,6 +196,17 @@ def all_or_none() -> Iterator[None]:
         _BATCH["files"] = None
 
 
+def pending(path: str | Path) -> Path:
+    """The file that holds ``path``'s new content now: inside :func:`all_or_none`, the
+    temporary one written for it and not yet renamed (for a step that reads it back, as
+    the PDF printer reads the HTML); else ``path`` itself."""
+    path = Path(path)
+    for tmp, final in reversed(_BATCH["files"] or []):
+        if final == path or final.resolve() == path.resolve():
+            return tmp
+    return path
+
+
 def _names(exc: OSError, tmp: Path) -> bool:
     """Whether ``exc`` is about the temporary ``tmp`` (its file name, or its name in the
     message of a writer that does not set ``filename``)."""
