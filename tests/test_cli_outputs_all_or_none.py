@@ -239,3 +239,31 @@ def test_report_without_a_pdf_printer_writes_no_html(files, tmp_path, capsys, mo
                       "--out", out / "r.html", "--pdf", out / "r.pdf"], capsys)
     assert code == 2 and len(err) == 1 and "Chromium" in err[0], err
     assert list(out.iterdir()) == []
+
+
+def test_simulate_truth_that_fails_leaves_no_recording(tmp_path, capsys, monkeypatch):
+    import fogbayes.cli.simulate as sim
+
+    def broken(*args, **kwargs):
+        raise FogbayesError("the truth failed", file="truth.json")
+
+    monkeypatch.setattr(sim, "write_json", broken)
+    code, err = _run(["-q", "simulate", "thermal", "--duration", "600", "--fs", "1", "-o",
+                      tmp_path / "s.csv", "--truth", tmp_path / "truth.json"], capsys)
+    assert code == 2 and err == ["fogbayes: error: truth.json: the truth failed"], err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_summary_that_fails_leaves_no_report_or_recording(tmp_path, capsys,
+                                                              monkeypatch):
+    import fogbayes.cli.demo as demo
+
+    def broken(*args, **kwargs):
+        raise FogbayesError("the summary failed", file="demo.json")
+
+    monkeypatch.setattr(demo, "summary_document", broken)
+    out = tmp_path / "demo"
+    code, err = _run(["-q", "demo", "--out", out, "--duration", "1800", "--fs", "1",
+                      "--json", tmp_path / "demo.json"], capsys)
+    assert code == 2 and err == ["fogbayes: error: demo.json: the summary failed"], err
+    assert [p.name for p in tmp_path.rglob("*")] in ([], ["demo"])  # at most the folder

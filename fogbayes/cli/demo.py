@@ -45,14 +45,17 @@ def demo(
 
     refuse_overwrite({}, {"--out": out / "report.html",  # first: a bad folder names --out
                           "the recording": out / "demo_recording.csv", "--json": json_out})
-    with progress("fogbayes demo", total=5) as advance:
-        def step(msg):
-            say(msg)
-            advance()
+    from ..data.atomic import all_or_none
 
-        result = run_demo(out, seed=seed, duration=duration, fs=fs, step=step)
-    if json_out:
-        write_json(summary_document(result), json_out)
+    with all_or_none():  # the report, the recording and --json appear all or none
+        with progress("fogbayes demo", total=5) as advance:
+            def step(msg):
+                say(msg)
+                advance()
+
+            result = run_demo(out, seed=seed, duration=duration, fs=fs, step=step)
+        if json_out:
+            write_json(summary_document(result), json_out)
     if json_out == "-":  # stdout holds the JSON document only
         say(result.summary)
     else:

@@ -78,9 +78,14 @@ def simulate(
         if not isinstance(effects[name.strip()], dict):
             raise ArgumentError(f"parameters of effect '{name}' are {params}, not a JSON object",
                                 column="--effect", fix="write e.g. --effect step='{\"size\": 0.5}'")
-    with progress(f"simulating {scenario}"):
-        sim = run(scenario, seed=seed, fs=fs, duration=duration, effects=effects or None)
-        save(sim.recording, out)
+    from ..data.atomic import all_or_none
+
+    with all_or_none():  # --out and --truth appear both or neither
+        with progress(f"simulating {scenario}"):
+            sim = run(scenario, seed=seed, fs=fs, duration=duration, effects=effects or None)
+            save(sim.recording, out)
+        if truth is not None:
+            write_json(sim.truth.params, truth, tell=False)
     say(f"wrote {out}: {sim.recording!r}")
-    if truth is not None:
-        write_json(sim.truth.params, truth)
+    if truth is not None and truth != "-":
+        say(f"wrote {truth}")
