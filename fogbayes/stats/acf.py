@@ -1,17 +1,9 @@
-"""Sample autocorrelation and partial autocorrelation with confidence bands.
+"""Sample ACF and PACF with confidence bands (NumPy/SciPy; ACF by FFT, O(n log n)).
 
-ACF (the usual biased estimator, the one whose matrix is positive semi-definite)::
-
-    rho_k = c_k / c_0,   c_k = (1/n) sum_{t=k+1}^{n} (x_t - xbar)(x_{t-k} - xbar)
-
-PACF by the Durbin-Levinson recursion on rho (phi_kk, the last coefficient of the AR(k)
-Yule-Walker fit; statsmodels' ``method="ldb"``).
-
-Bands (two-sided, level 1 - alpha, z = Phi^-1(1 - alpha/2)):
-* white-noise band for both ACF and PACF: +- z / sqrt(n);
-* Bartlett's band for the ACF under an MA(k-1) null: +- z sqrt((1 + 2 sum_{j<k} rho_j^2) / n).
-
-NumPy/SciPy only (model-free statistics); the ACF uses an FFT, O(n log n).
+ACF: the biased estimator rho_k = c_k / c_0, c_k = (1/n) sum_t (x_t - xbar)(x_{t-k} - xbar).
+PACF: Durbin-Levinson on rho (statsmodels' ``method="ldb"``). Bands at level 1 - alpha,
+z = Phi^-1(1 - alpha/2): white noise +- z/sqrt(n); Bartlett (ACF, MA(k-1) null)
++- z sqrt((1 + 2 sum_{j<k} rho_j^2) / n).
 """
 
 from __future__ import annotations

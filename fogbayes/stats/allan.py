@@ -1,23 +1,12 @@
 """Allan deviation family with noise identification, EDF and chi-square intervals.
 
-:func:`allan_deviation` is the NumPy-facing entry point: it picks the tau grid
-(:mod:`~fogbayes.stats.taus`), computes the variances (``oadev`` on CPU: the cache-blocked
-accumulators of :mod:`~fogbayes.stats.allan_blocked`; other kinds and accelerators: the
-jitted cumulative-sum kernels of :mod:`~fogbayes.stats.allan_kernels`, a 2-D input being a
-batch of sensors), identifies the noise type per tau by the lag-1 autocorrelation
-(:mod:`~fogbayes.stats.noise_id`), computes Greenhall's EDF for that noise type
-(:mod:`~fogbayes.stats.edf`) and the chi-square interval of the deviation.
-
-Missing samples are NaN. Every term that spans a NaN is excluded; ``n_terms`` counts the terms
-kept and ``excluded`` the ones dropped (also stated in :attr:`AllanDeviation.note`). The EDF
-with gaps treats the kept terms as one contiguous run of the same count (an approximation).
-
-Example:
-    >>> import numpy as np
-    >>> y = np.random.default_rng(0).normal(size=10_000)   # white rate, 1 Hz
-    >>> res = allan_deviation(y, 1.0, taus="octave")
-    >>> res.tau[:3].tolist(), bool(abs(res.dev[0] - 1) < 0.05)
-    ([1.0, 2.0, 4.0], True)
+:func:`allan_deviation` picks the tau grid (:mod:`~fogbayes.stats.taus`), computes the
+variances (:mod:`~fogbayes.stats.allan_blocked` for ``oadev`` on CPU, else
+:mod:`~fogbayes.stats.allan_kernels`; 2-D input is a batch of sensors), identifies the noise
+per tau (:mod:`~fogbayes.stats.noise_id`), and gives Greenhall's EDF
+(:mod:`~fogbayes.stats.edf`) and the chi-square interval. NaN samples are gaps: every term
+spanning one is excluded (``n_terms`` kept, ``excluded`` dropped); the EDF treats the kept
+terms as one contiguous run.
 """
 
 from __future__ import annotations

@@ -1,39 +1,11 @@
 r"""Overlapping Allan variance accumulated chunk by chunk in O(max lag + chunk) memory.
 
-With rate samples :math:`y_j`, the block sum of ``m`` samples ending at ``j`` and the
-overlapping Allan term completed at ``j`` are
-
-.. math::
-
-    B_m(j) = \sum_{k=j-m+1}^{j} y_k, \qquad D_m(j) = B_m(j) - B_m(j-m),
-    \qquad \sigma^2(m) = \frac{1}{2 m^2 L} \sum_{j=2m-1}^{n-1} D_m(j)^2, \quad L = n-2m+1,
-
-which is NIST SP 1065 eq. 11 (with phase :math:`x = S/f_s`, :math:`S_k = \sum_{j<k} y_j`,
-:math:`D_m(j) = S_{j+1} - 2 S_{j+1-m} + S_{j+1-2m}`) and the estimator of
-:mod:`fogbayes.stats.allan_kernels`. Two accumulators compute it while the samples stream
-past, each keeping only what the largest lag needs:
-
-* :class:`OctaveAccumulator` (m = 1, 2, 4, ..., 2^(K-1)): the Haar pyramid
-  :math:`B_{2m}(j) = B_m(j) + B_m(j-m)`, :math:`D_m(j) = B_m(j) - B_m(j-m)`: two additions
-  and a sum of squares per sample and level, and a buffer of the last ``m`` block sums per
-  level (about ``2 * 2^(K-1) + K * chunk`` floats in all). No phase is ever formed: each
-  :math:`B_m` is a sum of ``m`` samples by a binary tree, so rounding stays relative to the
-  block sums themselves, never to a phase that wanders over the whole record.
-* :class:`PhaseAccumulator` (any set of m): a window of the last ``2 max(m) + chunk`` phase
-  points, :math:`D = (S_e + S_{e-2m}) - 2 S_{e-m}` per tau (``2 S`` kept alongside: doubling
-  is exact). The window is compacted (its tail moved to the front and re-based to 0) when
-  full, so the phase stays the local excursion over about ``4 max(m)`` samples.
-
-Both subtract a provisional offset (the first chunk's mean; the variance does not depend on
-a constant offset) and accumulate each level's sum of squares in pieces of 8192 terms
-combined by Neumaier-compensated addition, so a 2e9-sample sum loses no more than a few
-units in the last place. The per-chunk work of all levels is one call of a fused compiled
-loop (:mod:`fogbayes.stats.allan_loops`); these classes keep the buffers and the bookkeeping.
-
-Gaps: NaN samples are missing. A term is kept only if none of its ``2m`` samples is NaN (as
-:mod:`fogbayes.stats.allan_kernels` does); ``counts`` are the terms kept. The pyramid lets
-NaN propagate (a NaN block sum poisons exactly the terms that span it) and only inspects a
-piece whose sum came out NaN; the phase accumulator keeps a running NaN count.
+With block sums :math:`B_m(j) = \sum_{k=j-m+1}^{j} y_k` and :math:`D_m(j) = B_m(j) - B_m(j-m)`,
+:math:`\sigma^2(m) = \sum_j D_m(j)^2 / (2 m^2 L)`, ``L = n - 2m + 1`` (NIST SP 1065 eq. 11).
+:class:`OctaveAccumulator` (m = 2^k) uses the Haar pyramid :math:`B_{2m}(j) = B_m(j) + B_m(j-m)`;
+:class:`PhaseAccumulator` (any m) a compacted window of the phase. Sums of squares are added
+in pieces with Neumaier compensation; terms spanning a NaN are dropped (``counts`` = kept).
+The per-chunk loops are :mod:`fogbayes.stats.allan_loops`.
 """
 
 from __future__ import annotations

@@ -1,21 +1,10 @@
 """In-memory overlapping Allan variance by the streaming accumulators (compiled, cache-blocked).
 
-The same estimator as :func:`fogbayes.stats.allan_kernels.allan_variance` with
-``kind="oadev"`` (NIST SP 1065 eq. 11; see :mod:`fogbayes.stats.allan_accumulators`), computed by
-walking the record once in cache-sized chunks:
-
-* octave cluster sizes (any subset of 1, 2, 4, ...): the Haar pyramid, two additions and a
-  sum of squares per sample and octave;
-* any other set: the phase window, three vector operations and a sum of squares per sample
-  and tau.
-
-Why not XLA: on this project's CPU, XLA copies each shifted slice of the phase before the
-reduction (measured 1.4-9 ns per sample and tau for fused kernels); the fused compiled loops
-of :mod:`fogbayes.stats.allan_loops` on chunks that stay in L1/L2 cost about 0.25 ns per
-sample and octave; allantools does 5-6 full-size memory passes per tau. A batch runs its
-sensors on threads (one per core). Differences to ``allan_variance``: no noise
-identification or intervals (this returns variances and term counts only); gaps (NaN) are
-handled the same way.
+The estimator of :func:`fogbayes.stats.allan_kernels.allan_variance` with ``kind="oadev"``
+(NIST SP 1065 eq. 11; :mod:`fogbayes.stats.allan_accumulators`), in one pass over the record
+in cache-sized chunks; batches run one sensor per thread. Returns variances and term counts
+only (no noise identification or intervals); NaN gaps as ``allan_variance``. Why not XLA on
+CPU: benchmarks/RESULTS_allan.md.
 """
 
 from __future__ import annotations

@@ -1,36 +1,13 @@
 r"""Joint covariance of overlapping Allan-variance estimates at several cluster sizes.
 
-AVAR estimates at neighbouring taus share data: for white rate noise adjacent octaves have a
-correlation of ~0.5, for rate random walk ~0.9 (and ~0.5 three octaves apart). A likelihood
-that treats them as independent is overconfident; this module computes the covariance of a
-mixture of power-law noises exactly (for Gaussian noise, in discrete time).
-
-With the phase :math:`S_k = \sum_{j<k} y_j` in sample units, the overlapping AVAR at ``m`` is
-:math:`\hat\sigma^2(m) = \frac{1}{2m^2 M}\sum_{i<M} d_i^2` with
-:math:`d_i = S_{i+2m} - 2S_{i+m} + S_i`. If :math:`\Gamma` is a generalized autocovariance of
-``S`` (defined up to a cubic polynomial, which the two second differences annihilate),
-
-.. math::
-
-    G(x) = \mathrm{Cov}(d_i(m_1), d_{i+x}(m_2))
-         = \sum_{a,b=0}^{2} c_a c_b\,\Gamma(x + b m_2 - a m_1), \quad c = (1, -2, 1)
-
-    \mathrm{Cov}(\hat\sigma^2_1, \hat\sigma^2_2)
-        = \frac{2 \sum_x n(x)\,G(x)^2}{(2 m_1^2 M_1)(2 m_2^2 M_2)},
-    \quad n(x) = \#\{i < M_1, l < M_2 : l - i = x\}
-
-(Gaussian fourth moments). The noise types and their :math:`\Gamma` at unit scale:
-quantization (white angle) :math:`\delta_k`; white rate :math:`-|k|/2`; flicker rate
-:math:`k^2\ln|k|`; random-walk rate :math:`(|k|^3-|k|)/12`, giving expected AVARs
-:math:`3/m^2`, :math:`1/m`, :math:`4\ln 2` and :math:`m/3 + 1/(6m)`. Because the
-autocovariances of independent noises add, the covariance is a quadratic form in the scales,
-:math:`\mathrm{Cov}_{jk} = \sum_{p,q} s_p s_q T^{pq}_{jk}`; the tensor ``T`` is computed once
-per tau grid in NumPy and the form is evaluated in JAX for any scales (inside a sampler).
-
-A deterministic rate ramp of ``r`` per sample adds :math:`c = r m^2` to every :math:`d_i`: its
-mean AVAR :math:`r^2 m^2/2` and, through :math:`(d + c)^2`, the covariance
-:math:`4 c_1 c_2 \sum_x n(x) G(x) / ((2m_1^2M_1)(2m_2^2M_2))`, linear in the scales
-(tensor ``U``). Without it a ramp would look noise-free and a fit would favour it at long tau.
+With :math:`d_i = S_{i+2m} - 2S_{i+m} + S_i` (phase in samples) and a generalized
+autocovariance :math:`\Gamma` of ``S``, :math:`G(x) = \sum_{a,b} c_a c_b \Gamma(x + b m_2 - a m_1)`,
+``c = (1, -2, 1)``, and for Gaussian noise
+:math:`\mathrm{Cov}(\hat\sigma^2_1, \hat\sigma^2_2) = 2 \sum_x n(x) G(x)^2 / ((2 m_1^2 M_1)(2 m_2^2 M_2))`.
+:math:`\Gamma` at unit scale: quantization :math:`\delta_k`, white rate :math:`-|k|/2`, flicker
+:math:`k^2\ln|k|`, rate random walk :math:`(|k|^3-|k|)/12`. The covariance is a quadratic form in
+the noise scales (tensor ``T``, built in NumPy, evaluated in JAX); a rate ramp ``r`` adds
+:math:`c = r m^2` to each :math:`d_i` and a term linear in the scales (tensor ``U``).
 """
 
 from __future__ import annotations

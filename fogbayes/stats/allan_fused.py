@@ -1,45 +1,12 @@
-r"""Modified Allan and overlapping Hadamard variances of rate data in fused compiled loops.
+r"""Modified Allan and overlapping Hadamard variances of rate data in fused compiled loops (Numba).
 
-The estimators of :func:`fogbayes.stats.allan_kernels.allan_variance` (``kind="mdev"`` and
-``kind="ohdev"``; NIST SP 1065 eqs. 14 and 18), computed by Numba on CPU in one pass over
-the phase per cluster size. With rate samples :math:`y_0 \dots y_{n-1}`, the phase (in
-samples) :math:`S_0 = 0,\ S_k = \sum_{j<k} (y_j - \bar y)` (``N = n + 1`` points), the
-block sums :math:`A_i = S_{i+m} - S_i` and
-
-.. math::
-
-    d_i = A_{i+m} - A_i = S_{i+2m} - 2 S_{i+m} + S_i, \qquad
-    h_i = d_{i+m} - d_i = S_{i+3m} - 3 S_{i+2m} + 3 S_{i+m} - S_i,
-
-    H\sigma^2_{\mathrm{O}}(m) = \frac{1}{6 m^2 L} \sum_{i=0}^{L-1} h_i^2, \quad L = N - 3m,
-    \qquad
-    \mathrm{Mod}\,\sigma^2(m) = \frac{1}{2 m^4 L} \sum_{j=0}^{L-1} v_j^2, \quad
-    v_j = \sum_{i=j}^{j+m-1} d_i, \quad L = N - 3m + 1.
-
-The inner sums of the modified variance are running sums of the Hadamard terms,
-:math:`v_{j+1} = v_j + h_j` (O(1) per term, as allantools does). That recursion is one long
-chain of dependent additions, so the ``L`` terms are cut into four segments whose running
-sums are interleaved, each started from a directly summed :math:`v` (which also bounds the
-drift of a running sum to one segment); the last ``L mod 4`` terms are summed directly.
-Per chunk of 2048 terms the ``h`` are formed first (strict IEEE, SIMD), then squared and
-summed with only the order of that sum relaxed (``reassoc``: no effect beyond the last few
-bits). The variances are in the unit of ``y`` squared, independent of the sample rate (the
-phase ``S / fs`` and ``tau = m / fs`` cancel), and do not change with a constant rate offset
-(second and third differences of the phase cancel it); the mean is removed only to keep the
-phase small. Precision is that of the kernel: rounding of the phase, about
-``eps * max|S| / |term|`` relative (1e-14 on white noise; on a random walk of 2^20 samples
-both this and the XLA kernel are off by up to ~1e-7 from a long-double reference).
-
-Gaps (non-finite samples) as ``allan_variance(..., gaps=True)``: they add nothing to the
-phase (zero after the mean of the finite samples is removed) and a prefix count ``G`` of
-them marks the terms that touch one, which are excluded: ``h_i`` spans samples
-``i .. i+3m-1``, ``v_j`` samples ``j .. j+3m-2``. ``count`` is the number of terms kept; a
-cluster size with no term left has variance NaN (0 / 0, as the kernel).
-
-Speed (2-core AMD EPYC, shared; 2^20 white-noise samples, octave grid of 19 cluster sizes,
-compiled, best of 3): mdev ~17 ms, ohdev ~8.5 ms, against allantools 2024.06 ~130-140 ms
-and ~50-57 ms and the XLA kernels ~105-110 ms and ~16-44 ms. Each cluster size is one pass
-over the phase either way: one call per tau from Python measured the same.
+With phase :math:`S_k = \sum_{j<k}(y_j - \bar y)`, :math:`d_i = S_{i+2m} - 2S_{i+m} + S_i`,
+:math:`h_i = d_{i+m} - d_i`:
+:math:`H\sigma^2_O(m) = \sum_{i<L} h_i^2 / (6 m^2 L)`, ``L = N - 3m``;
+:math:`\mathrm{Mod}\,\sigma^2(m) = \sum_{j<L} v_j^2 / (2 m^4 L)`, :math:`v_j = \sum_{i=j}^{j+m-1} d_i`,
+``L = N - 3m + 1`` (NIST SP 1065 eqs. 14, 18); :math:`v_{j+1} = v_j + h_j`, interleaved in four
+segments. Units of ``y`` squared. Non-finite samples are gaps: terms touching one are excluded
+(``count`` = kept; none kept gives NaN), as ``allan_variance(..., gaps=True)``.
 """
 
 from __future__ import annotations

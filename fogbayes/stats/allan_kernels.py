@@ -1,37 +1,12 @@
-r"""JAX kernels of the Allan family on rate data, by cumulative sums (O(n) work per tau).
+r"""JAX kernels of the Allan family on rate data, by cumulative sums (O(n) per tau).
 
-With rate samples :math:`y_0 \dots y_{n-1}` and the phase (integrated rate, in samples)
-:math:`S_0 = 0,\ S_k = \sum_{j<k} (y_j - \bar y)`, the block sums are
-:math:`A_i(m) = S_{i+m} - S_i` and, for a cluster size ``m``,
-
-.. math::
-
-    \sigma^2_{\mathrm{OA}}(m) = \frac{1}{2 m^2 L}\sum_{i=0}^{L-1} (A_{i+m} - A_i)^2,
-    \qquad L = n + 1 - 2m,
-
-    H\sigma^2_{\mathrm{O}}(m) = \frac{1}{6 m^2 L}\sum_{i=0}^{L-1}
-        (A_{i+2m} - 2A_{i+m} + A_i)^2, \qquad L = n + 1 - 3m,
-
-    \mathrm{Mod}\,\sigma^2(m) = \frac{1}{2 m^4 L}\sum_{j=0}^{L-1}
-        \Big(\sum_{i=j}^{j+m-1} (A_{i+m} - A_i)\Big)^2, \qquad L = n + 2 - 3m,
-
-(NIST SP 1065 eqs. 11, 14, 18 with phase ``x = S / fs``). The non-overlapping variants keep
-only the terms ``i = 0, m, 2m, ...``. The variances are in the unit of ``y`` squared and do
-not depend on the sample rate.
-
-Precision: the mean is subtracted before the cumulative sum (the phase then wanders like the
-noise, not like ``n * mean``), and the differences are taken as differences of block sums,
-each of which is one correctly rounded subtraction.
-
-Gaps: NaN samples are set to zero after the mean is removed and counted in a second prefix
-sum ``G``; a term is kept only if ``G`` does not change over the samples it spans, so every
-term that touches a gap is excluded (never interpolated). ``count`` returns the terms kept.
-
-Cluster sizes are static (a tuple chosen in NumPy). Three code paths give the same sums:
-``direct`` (one fused expression per tau: best on GPU), ``chunked`` (a loop over
-cache-sized chunks that reads all taus from the same chunk: on CPU, XLA copies large slices
-instead of fusing them, and this avoids it) and ``mapped`` (``lax.map`` over m with dynamic
-slices: for thousands of taus, where unrolling would make compilation explode).
+Phase :math:`S_k = \sum_{j<k}(y_j - \bar y)`, block sums :math:`A_i = S_{i+m} - S_i`:
+:math:`\sigma^2_{OA} = \sum (A_{i+m} - A_i)^2 / (2m^2L)`, ``L = n+1-2m``;
+:math:`H\sigma^2_O = \sum (A_{i+2m} - 2A_{i+m} + A_i)^2 / (6m^2L)`, ``L = n+1-3m``;
+:math:`\mathrm{Mod}\,\sigma^2 = \sum_j (\sum_{i=j}^{j+m-1} (A_{i+m} - A_i))^2 / (2m^4L)`, ``L = n+2-3m``
+(NIST SP 1065 eqs. 11, 14, 18); non-overlapping variants keep ``i = 0, m, 2m, ...``. Units of ``y``
+squared. NaN gaps are counted in a second prefix sum and every term touching one is excluded.
+Paths ``direct`` (GPU), ``chunked`` (CPU) and ``mapped`` (thousands of taus) give the same sums.
 """
 
 from __future__ import annotations

@@ -1,24 +1,9 @@
-r"""Fused compiled loops behind the Allan accumulators (Numba, CPU).
+"""Fused compiled loops behind the Allan accumulators (Numba, CPU, ``nogil``, ``cache=True``).
 
-One call per chunk does, for every level or tau, what the NumPy version did with three or
-four array passes: form the Allan term, square and sum it, and (pyramid) build the next
-level's block sums, all while the chunk stays in L1/L2. The equations are those of
-:mod:`fogbayes.stats.allan_accumulators`:
-
-* pyramid (octave m = 2^k): :math:`D_m(j) = B_m(j) - B_m(j-m)`,
-  :math:`B_{2m}(j) = B_m(j) + B_m(j-m)`;
-* phase window (any m): :math:`D_m(e) = (S_e + S_{e-2m}) - 2 S_{e-m}`.
-
-Sums of squares are taken in pieces of :data:`PIECE` terms (each piece reassociated, so the
-compiler may use SIMD lanes) and the pieces are added with Neumaier compensation into
-``sums``/``comps``: a 2e9-sample record loses no more than a few units in the last place.
-NaN terms (gaps) are skipped and counted: a piece whose plain sum is NaN is summed again with
-the NaN test, so records without gaps pay nothing for it.
-
-Why compiled loops: NumPy needs one pass over the chunk per operation (about 0.6 ns per sample
-and level here); fused, the level costs one read of the two block sums and one write.
-``cache=True`` stores the machine code in the user's cache folder (:mod:`fogbayes.support.numba_cache`),
-so only the first process pays the 1-2 s compilation. The steps release the GIL (``nogil``): sensors of a batch run on threads.
+Per chunk and level or tau (equations of :mod:`fogbayes.stats.allan_accumulators`): pyramid
+:math:`D_m(j) = B_m(j) - B_m(j-m)`, :math:`B_{2m}(j) = B_m(j) + B_m(j-m)`; phase window
+:math:`D_m(e) = (S_e + S_{e-2m}) - 2S_{e-m}`. Squares are summed in pieces of :data:`PIECE`
+terms, added with Neumaier compensation into ``sums``/``comps``; NaN terms are skipped and counted.
 """
 
 from __future__ import annotations

@@ -1,38 +1,12 @@
 r"""Equivalent degrees of freedom (Greenhall & Riley 2004) and chi-square intervals.
 
-An Allan-family variance estimate is distributed approximately as
-:math:`\hat\sigma^2 \sim \sigma^2\,\chi^2_\nu/\nu` with the EDF :math:`\nu`. Greenhall's
-general algorithm (Greenhall & Riley, "Uncertainty of stability variances based on finite
-differences", PTTI 2003/2004, eqs. 7-10) is, for a power-law rate noise
-:math:`S_y \propto f^\alpha`, a ``d``-th difference variance (d = 2 Allan, 3 Hadamard),
-averaging factor ``m``, ``N`` phase points, filter factor ``F`` (``m`` unmodified, 1 modified)
-and stride factor ``S`` (``m`` overlapping, 1 non-overlapping):
-
-.. math::
-
-    s_w(t) = \{-|t|,\ t^2\ln|t|,\ |t|^3,\ t^4\ln|t|,\ |t|^5,\ t^6\ln|t|,\ |t|^7\}
-      \ \text{for}\ \alpha = 2, 1, \dots, -4
-
-    s_x(t) = F^2\,[2 s_w(t) - s_w(t - 1/F) - s_w(t + 1/F)]
-      \quad (F = \infty:\ s_x = s_w \text{ with } \alpha + 2)
-
-    s_z(t) = \sum_{k=-d}^{d} (-1)^k \binom{2d}{d+k} s_x(t + k)
-
-    L = m/F + m d,\quad M = 1 + \lfloor S (N - L)/m \rfloor,\quad J = \min(M, (d+1) S)
-
-    \frac{1}{\nu} = \frac{1}{M s_z(0)^2}\Big[s_z(0)^2 + (1 - J/M)\,s_z(J/S)^2
-        + 2\sum_{j=1}^{J-1} (1 - j/M)\,s_z(j/S)^2\Big].
-
-The sum is evaluated exactly (not with Greenhall's tables) up to 2 000 terms; beyond, the
-integers next to each kink of s_z exactly and the smooth stretches between them as integrals
-by graded Gauss-Legendre quadrature with Euler-Maclaurin's first end correction (relative
-error against the exact sum at most 1.6e-6, flicker phase alpha = 1; 1e-7 for the others). As in Greenhall's
-"case 2b", unmodified variances with alpha <= 0 and ``m (d + 1) > 100`` use ``F = infinity``
-(the continuous-time limit, which avoids cancellation in ``s_x`` at large ``m``).
-
-Chi-square interval at confidence ``ci`` (NIST SP 1065 eq. 45):
-:math:`\sigma^2_{lo} = \nu\hat\sigma^2/\chi^2_{\nu}((1+ci)/2)`,
-:math:`\sigma^2_{hi} = \nu\hat\sigma^2/\chi^2_{\nu}((1-ci)/2)`.
+:math:`\hat\sigma^2 \sim \sigma^2\chi^2_\nu/\nu`. Greenhall's general algorithm (PTTI 2003,
+eqs. 7-10) for rate PSD :math:`\propto f^\alpha`, difference order ``d`` (2 Allan, 3 Hadamard),
+factor ``m``, ``N`` phase points, filter ``F`` and stride ``S``:
+:math:`1/\nu = [s_z(0)^2 + (1 - J/M)s_z(J/S)^2 + 2\sum_{j<J}(1 - j/M)s_z(j/S)^2] / (M s_z(0)^2)`,
+evaluated exactly up to 2 000 terms, beyond by Gauss-Legendre quadrature between the kinks of
+``s_z`` (relative error <= 1.6e-6). Unmodified, alpha <= 0, ``m(d+1) > 100``: ``F = infinity``.
+Interval (NIST SP 1065 eq. 45): :math:`[\nu\hat\sigma^2/\chi^2_\nu((1+ci)/2),\ \nu\hat\sigma^2/\chi^2_\nu((1-ci)/2)]`.
 """
 
 from __future__ import annotations

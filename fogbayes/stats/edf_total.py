@@ -1,96 +1,12 @@
-r"""Equivalent degrees of freedom of TOTDEV, MTOTDEV, HTOTDEV and Theo1 (NIST SP 1065, sec. 5.3).
+r"""EDF and bias factors of TOTDEV, MTOTDEV, HTOTDEV and Theo1 (NIST SP 1065 sec. 5.3; Stable32 1.60).
 
-``N`` is the number of phase points (``n + 1`` for ``n`` rate samples) and ``m`` the
-averaging factor throughout; ``alpha`` is the power-law exponent of the rate PSD
-(+2 white PM, +1 flicker PM, 0 white FM, -1 flicker FM, -2 random-walk FM). A formula that
-gives no positive value (outside the range it was fitted for, e.g. Theo1 near ``m = N``)
-returns NaN, and so do the chi-square bounds built on it.
-
-**TOTDEV** (SP 1065 Table 7, Howe): :math:`\nu = b\,(T/\tau) - c` with ``T / tau = N / m``
-(as allantools' ``edf_totdev``; ``(N-1)/m`` differs by one sample in ``N``):
-
-    ==========  ====  ====
-    alpha        b     c
-    ==========  ====  ====
-     0 (WFM)    1.50  0.00
-    -1 (FFM)    1.17  0.22
-    -2 (RWFM)   0.93  0.36
-    ==========  ====  ====
-
-For white and flicker PM (alpha = 2, 1), for which the table has no entry, the simple AVAR
-approximations of SP 1065 Table 5 (Stein):
-:math:`\nu = (N+1)(N-2m) / (2(N-m))` (alpha = 2) and
-:math:`\nu = \exp\sqrt{\ln\frac{N-1}{2m}\,\ln\frac{(2m+1)(N-1)}{4}}` (alpha = 1). That is
-what Stable32 does: its printed 68.3 % TOTDEV intervals of the OCXO record at alpha = 1
-(m = 1, 2, 8) are reproduced to 6e-5 this way and not by Greenhall's OADEV EDF (1.6e-3 off
-at m = 8); allantools' ``edf_totdev`` falls back to the same formulas.
-
-**MTOTDEV / TTOTDEV** (SP 1065 Table 8): :math:`\nu = b\,(T/\tau) - c`, ``T / tau = N / m``:
-
-    ==========  ====  ====
-    alpha        b     c
-    ==========  ====  ====
-     2 (WPM)    1.90  2.10
-     1 (FPM)    1.20  1.40
-     0 (WFM)    1.10  1.20
-    -1 (FFM)    0.85  0.50
-    -2 (RWFM)   0.75  0.31
-    ==========  ====  ====
-
-**MTOTDEV / TTOTDEV as Stable32 1.60 computes them** (what ``total_deviation`` uses):
-Stable32's printed 68.3 % intervals of PHASE.DAT (1 001 phase points) are not Table 8's.
-Inverting them (``nu`` from each printed bound, Stable32's own sigma) gives two regimes:
-
-* ``T/tau = (N-1)/m > 100`` (PHASE.DAT: m = 1, 2, 4, 8): Greenhall's EDF of the
-  overlapping *modified* Allan variance (:func:`~fogbayes.stats.edf.edf_greenhall`,
-  d = 2), the value Stable32 prints for MDEV at the same m and alpha;
-* ``T/tau <= 100`` (m = 10 ... 256): :math:`\nu = b\,(N-1)/m - c`, linear in ``1/m`` to
-  within 0.01 EDF, with ``(b, c) = (1.3335, 1.894)`` for white FM and ``(1.7345, 2.993)`` for
-  flicker PM (least squares on the octave rows m = 16 ... 256; the decade rows m = 10, 20,
-  40, 100, 200 are then reproduced to 3.7e-4 in the bounds, every row to 4.4e-4).
-  Stable32's tables fix no other noise type; for alpha = 2, -1, -2 Table 8 is kept.
-
-The tables place the switch between m = 8 and m = 10 and cannot tell ``m < 10`` from
-``T/tau > 100``; the latter keeps the fitted line inside the range it was recovered on.
-
-**HTOTDEV** (Stable32 1.60 on PHASE.DAT, SP 1065 sec. 5.3): for white FM and ``m >= 16``,
-:math:`\nu = (N/m) / (b_0 + b_1\,m/N)` with ``(b0, b1) = (0.559, 1.004)`` (the printed
-bounds at m = 16, 32, 64 to 5e-4); for PM noise the Table 5 (Stein) formulas above, as for
-TOTDEV (white PM: every printed bound, m = 1 ... 256, to 4e-4; flicker PM: m = 128 to
-2.7e-3, m = 256 to 1.4e-2, where Stable32's EDF is 12 % larger than Stein's). Elsewhere
-(m < 16, and FM noises other than white) Stable32's rule is not recovered here: Greenhall's
-EDF of the overlapping Hadamard variance is used, which HTOTDEV's own EDF exceeds, so those
-intervals are conservative (PHASE.DAT white FM, m = 1 ... 8: bounds 0.14-0.9 % wider).
-
-**HTOTDEV bias** (Stable32; Howe et al.): ``E[Htotvar] / Hvar`` = 0.995 (white FM), 0.851
-(flicker FM), 0.771 (random-walk FM), 0.717 (alpha = -3), 0.679 (alpha = -4); 1 for PM noise.
-Stable32 divides by it (PHASE.DAT: its corrected and uncorrected tables differ by exactly
-1/sqrt(0.995) at white FM, m >= 2, and not at all at flicker PM or m = 1).
-
-**Theo1** (SP 1065 Table 11, Howe & Tasset), with :math:`\tau = 0.75\,m` (in units of
-``tau0``, the Theo1 averaging time):
-
-.. math::
-
-    \nu_{WPM} &= \frac{0.86 (N+1)(N - 4\tau/3)}{N - \tau}\,\frac{\tau}{\tau + 1.14} \\
-    \nu_{FPM} &= \frac{4.798 N^2 - 6.374 N\tau + 12.387\tau}{\sqrt{\tau + 36.6}\,(N-\tau)}
-                 \,\frac{\tau}{\tau + 0.3} \\
-    \nu_{WFM} &= \Big(\frac{4.1 N + 0.8}{\tau} - \frac{3.1 N + 6.5}{N}\Big)
-                 \frac{\tau^{3/2}}{\tau^{3/2} + 5.2} \\
-    \nu_{FFM} &= \frac{2 N^2 - 1.3 N\tau - 3.5\tau}{N\tau}\,\frac{\tau^3}{\tau^3 + 2.3} \\
-    \nu_{RWFM} &= \frac{4.4 N - 2}{2.9\tau}\,
-                 \frac{(4.4N-1)^2 - 8.6\tau(4.4N-1) + 11.4\tau^2}{(4.4N-3)^2}
-
-(the same fits written in ``m`` in Howe, Metrologia 43 (2006) S322, agree to the rounding of
-their constants, < 1.5 %; allantools 2024.6 has no Theo1 EDF).
-
-**Theo1 bias** (SP 1065 sec. 5.2.14, Howe & Tasset): Theo1 estimates the Allan variance at
-``tau = 0.75 m tau0`` with a noise-dependent bias, :math:`\mathrm{AVAR}/\mathrm{Theo1} =
-a + b/\tau^c` (``tau = 0.75 m``): WPM (0.09, 0.74, 0.40), FPM (0.14, 0.82, 0.30),
-WFM (1, 0, 0), FFM (1.87, -1.05, 0.79), RWFM (2.70, -1.53, 0.85).
-
-**TOTDEV bias** (SP 1065 sec. 5.2.11): :math:`E[\mathrm{TOTVAR}]/\mathrm{AVAR} = 1 - a\,\tau/T`
-with ``a = 1/(3 ln 2) = 0.481`` (FFM), ``0.750`` (RWFM), 0 otherwise (``T = n tau0``).
+``N`` phase points, averaging factor ``m``, ``alpha`` the rate-PSD exponent; a formula with no
+positive value returns NaN. TOTDEV: Table 7, :math:`\nu = b N/m - c`; PM noise uses Table 5
+(Stein). MTOTDEV/TTOTDEV: as Stable32 prints them (Greenhall's MDEV EDF for ``(N-1)/m > 100``,
+else a line in ``1/m`` fitted to its PHASE.DAT intervals; Table 8 for alpha = 2, -1, -2).
+HTOTDEV: ``(N/m)/(b0 + b1 m/N)`` for white FM, ``m >= 16``; Stein for PM; else Greenhall's
+OHDEV EDF (conservative). Theo1: Table 11 (Howe & Tasset), ``tau = 0.75 m``. Bias: Htotvar/Hvar
+(:data:`HTOTVAR_BIAS`), AVAR/Theo1 = a + b/tau^c, TOTVAR/AVAR = 1 - a tau/T.
 """
 
 from __future__ import annotations

@@ -1,16 +1,10 @@
 r"""Power-law noise identification by the lag-1 autocorrelation (Riley & Greenhall 2004).
 
-For rate ("frequency") data averaged in clusters of ``m`` samples, with the linear trend
-removed, the lag-1 autocorrelation :math:`r_1` of the ``d``-times differenced series gives
-:math:`\delta = r_1/(1+r_1)`; differencing stops at the first ``d`` with :math:`\delta < 0.25`
-(or ``d = d_max``) and the power-law exponent of the rate PSD :math:`S_y(f) \propto f^\alpha`
-is :math:`\alpha = -\mathrm{round}(2\delta) - 2d`.
-
-Gyro reading of alpha: +2 quantization (white angle), 0 angle random walk (white rate),
--1 bias instability (flicker rate), -2 rate random walk (a rate ramp also reads as -2 or
-lower). The method needs about 30 averaged points; at larger tau the last identified alpha
-is carried forward (Stable32 switches to the B1/R(n) ratios there; carrying forward is a
-simpler rule with the same intent: the long-tau noise is the one seen last).
+For cluster means of rate data (trend removed), :math:`\delta = r_1/(1+r_1)` of the ``d``-times
+differenced series; differencing stops at the first ``d`` with :math:`\delta < 0.25`, and
+:math:`\alpha = -\mathrm{round}(2\delta) - 2d` (rate PSD :math:`\propto f^\alpha`: +2 quantization,
+0 angle random walk, -1 bias instability, -2 rate random walk). Below ~30 means the last alpha
+is carried forward.
 """
 
 from __future__ import annotations

@@ -1,23 +1,10 @@
-r"""One pass over a series for every lag-1 autocorrelation the noise identification needs.
+r"""One compiled pass for every lag-1 autocorrelation the noise identification needs.
 
-:func:`fogbayes.stats.noise_id._alpha_of_means` computes, for the finite values
-:math:`x_0 \dots x_{N-1}` of the cluster means, the lag-1 autocorrelation of
-
-* :math:`d = 0`: the residual of a straight-line fit, :math:`w_i = x_i - \bar x - b t_i`,
-  :math:`t_i = i - (N-1)/2`, :math:`b = \sum t_i x_i / \sum t_i^2`;
-* :math:`d \ge 1`: the ``d``-times differenced series, mean removed (the line only adds a
-  constant to a difference, which the mean removes).
-
-Each is :math:`r_1 = \sum_{i<N'-1} s_i s_{i+1} / \sum s_i^2` of a mean-zero series ``s``,
-so it follows from the sums :math:`\sum s`, :math:`\sum s^2`, :math:`\sum s_i s_{i+1}`,
-the end values and, for ``d = 0``, :math:`\sum i\,x_i` (expanded in :func:`lag1_from_sums`).
-:func:`lag1_sums` gathers all of them in one compiled pass (NumPy needed about fifteen
-passes: the filter copy, the line, the means, the products, each difference). Values are
-shifted by the first finite value so that a large offset does not cancel digits.
-
-Cancellation can still remain in ``d = 0`` when the straight line carries almost all of the
-variance (a ramp): :func:`lag1_from_sums` returns None then (the residual energy is below
-1e-6 of the centred energy) and the caller uses the two-pass NumPy path.
+:math:`r_1 = \sum s_i s_{i+1} / \sum s_i^2` of a mean-zero series (``d = 0``: line residual;
+``d >= 1``: the differenced series) follows from :math:`\sum s`, :math:`\sum s^2`,
+:math:`\sum s_i s_{i+1}`, the end values and :math:`\sum i x_i`: :func:`lag1_sums` gathers them,
+:func:`lag1_from_sums` expands them, returning None when the line holds all but 1e-6 of the
+variance (the caller then uses the two-pass NumPy path).
 """
 
 from __future__ import annotations

@@ -1,22 +1,8 @@
 """Bias and bias stability as paper 004 (and IEEE Std 952 users) define them.
 
-Paper 004, eqs. 12-13, with F the gyro output and K its scale factor::
-
-    B0 = mean(F) / K                                      (bias, deg/h)
-    Bs = (1 / K) sqrt( sum_i (F_i - F_bar)^2 / (n - 1) )  (bias stability, deg/h)
-
-where F_i are the output averaged over consecutive windows of ``window_s`` (1 s in the
-paper; 10 s and 100 s are the other figures IEEE 952 users quote) and n is their count.
-Here the rate is already in deg/h (``Recording.rate("deg/h")`` divides by K), so B0 is its
-mean and Bs the sample standard deviation of its window means.
-
-Windows are :func:`fogbayes.preprocess.blocks.block_average` blocks: consecutive
-``window_s`` bins that never straddle a gap; the incomplete last block of each run is left
-out, so that every window averages the same span and short ones do not inflate Bs.
-
-Improvement, as the paper reports it (1.645749 -> 0.501541 deg/h is 69.53 %)::
-
-    improvement % = 100 (Bs_before - Bs_after) / Bs_before
+Paper 004 eqs. 12-13, rate in deg/h: B0 = mean(F), Bs = sample standard deviation of the means
+over consecutive ``window_s`` windows (:func:`fogbayes.preprocess.blocks.block_average`; never
+across a gap, incomplete last block left out). Improvement % = 100 (Bs_before - Bs_after) / Bs_before.
 """
 
 from __future__ import annotations

@@ -1,28 +1,8 @@
-"""Averaging-time grids for the Allan family: cluster sizes ``m`` (tau = m / fs).
+"""Averaging-time grids for the Allan family: cluster sizes ``m`` (tau = m / fs), as static tuples.
 
-The grids are chosen in NumPy and returned as a sorted tuple of Python ints, so they can be
-handed to the jitted deviations as a static, hashable argument (one compilation per grid).
-
-Grids (``m_max`` caps every grid):
-
-* ``"octave"``  m = 1, 2, 4, 8, ...
-* ``"decade"``  m = 1, 2, 4, 10, 20, 40, 100, ... (Stable32 / allantools spacing)
-* ``"dense"``   about ``per_decade`` log-spaced values per decade, m = round(10^(k/per_decade)),
-  duplicates removed (at small m there are fewer than ``per_decade`` distinct integers)
-* ``"all"``     m = 1, 2, 3, ..., m_max
-
-Estimators (``kind``): ``oadev`` overlapping Allan, ``adev`` non-overlapping Allan, ``mdev``
-modified Allan, ``ohdev`` overlapping Hadamard, ``hdev`` non-overlapping Hadamard.
-
-Default ``m_max`` follows Stable32's "stop ratio": with ``N = n + 1`` phase points the largest
-cluster is ``N // ratio`` (4 for the overlapping estimators, 5 for the non-overlapping ones),
-beyond which fewer than ~3 independent differences remain and the estimate is mostly noise.
-
-Example:
-    >>> cluster_sizes(1000, "octave")
-    (1, 2, 4, 8, 16, 32, 64, 128)
-    >>> cluster_sizes(100, "decade")
-    (1, 2, 4, 10, 20)
+Grids: ``octave`` (1, 2, 4, ...), ``decade`` (1, 2, 4, 10, 20, 40, ...), ``dense``
+(``per_decade`` log-spaced), ``all``; kinds ``oadev``, ``adev``, ``mdev``, ``ohdev``, ``hdev``.
+Default ``m_max`` is Stable32's stop ratio: ``N // 4`` overlapping, ``N // 5`` non-overlapping.
 """
 
 from __future__ import annotations

@@ -1,28 +1,10 @@
 r"""Theo1 variance of rate data (NIST SP 1065 sec. 5.2.14, eq. 30; Howe & Tasset 2004).
 
-With the phase :math:`x` (``N = n + 1`` points, ``tau0 = 1/fs``) and an even averaging
-factor ``m``:
-
-.. math::
-
-    \mathrm{Theo1}(m, \tau_0, N) = \frac{1}{0.75\,(N-m)\,(m\tau_0)^2}
-        \sum_{i=1}^{N-m} \sum_{\delta=0}^{m/2-1} \frac{1}{m/2-\delta}
-        \big[(x_i - x_{i-\delta+m/2}) + (x_{i+m} - x_{i+\delta+m/2})\big]^2,
-
-at the averaging time :math:`\tau = 0.75\,m\,\tau_0`, for ``2 <= m <= N - 1`` (``m`` even;
-Stable32's stop ratio 1, so tau reaches 0.75 of the record). Theo1 has the Allan variance's
-response to white FM (it is unbiased for it) and far more degrees of freedom at long tau; for
-other noises it is biased with respect to AVAR at the same tau, a known factor per noise
-type (:func:`~fogbayes.stats.edf_total.theo1_bias_ratio`), which
-``total_deviation(..., kind="theo1", bias_corrected=True)`` applies with the identified
-noise type.
-
-The double sum is the compiled loop :func:`~fogbayes.stats.total_loops.theo1_sums`
-(O(N m / 2) per tau, SIMD over ``i``). Not implemented: TheoBR (the bias factor averaged
-from AVAR/Theo1 ratios at the ~N/30 averaging factors m = 12, 16, ..., 0.13 N) and TheoH:
-with these direct sums that step is O(N^3) (measured 2.3 s for N = 2e4 on a loaded 2-core
-CPU, so ~5 min for 1e5); a fast all-tau Theo1 (Lewis 2020, lagged products of the phase)
-would make it cheap but trades exact sums for cancellation that grows with N.
+For even ``m``, ``2 <= m <= N - 1``, at :math:`\tau = 0.75\,m\,\tau_0`:
+:math:`\mathrm{Theo1} = \frac{1}{0.75(N-m)(m\tau_0)^2}\sum_{i}\sum_{\delta=0}^{m/2-1}
+\frac{[(x_i - x_{i-\delta+m/2}) + (x_{i+m} - x_{i+\delta+m/2})]^2}{m/2-\delta}`.
+Unbiased for white FM; other noises take :func:`~fogbayes.stats.edf_total.theo1_bias_ratio`.
+Sums: :func:`~fogbayes.stats.total_loops.theo1_sums`. TheoBR/TheoH are not implemented.
 """
 
 from __future__ import annotations

@@ -1,69 +1,13 @@
-r"""Total deviations TOTDEV, MTOTDEV, TTOTDEV, HTOTDEV and Theo1 with EDF and chi-square intervals.
+"""Total deviations TOTDEV, MTOTDEV, TTOTDEV, HTOTDEV and Theo1 with EDF and chi-square intervals.
 
-:func:`total_deviation` returns the same :class:`~fogbayes.stats.allan_result.AllanDeviation`
-record as :func:`~fogbayes.stats.allan.allan_deviation` (which dispatches these kinds
-here). Rate samples :math:`y_0 \dots y_{n-1}` at ``fs``, ``tau0 = 1/fs``, phase
-:math:`x_k = \tau_0 \sum_{j<k} y_j` (``N = n + 1`` points), averaging factor ``m``.
-
-* ``totdev`` (NIST SP 1065 sec. 5.2.11, eq. 25): the phase extended by odd reflection about
-  both end points, :math:`x^*_{1-j} = 2x_1 - x_{1+j}`, :math:`x^*_{N+j} = 2x_N - x_{N-j}`
-  (``j = 1..N-2``), and
-
-  .. math:: \mathrm{Tot\,var}(\tau) = \frac{1}{2\tau^2 (N-2)} \sum_{i=2}^{N-1}
-      (x^*_{i-m} - 2x^*_i + x^*_{i+m})^2, \qquad \tau = m\tau_0,\ 1 \le m \le N-1.
-
-  ``n_terms`` = N - 2 (Stable32's "#"). Default grids stop at ``m = N // 2`` (T/2,
-  Stable32's stop ratio 2); explicit ``m`` up to ``N - 1`` are accepted.
-* ``mtotdev`` (sec. 5.2.12, eq. 27): for each of the ``N - 3m + 1`` subsequences of ``3m``
-  phase points, remove the half-average slope, extend by even (uninverted) reflection to
-  ``9m`` points :math:`x^\#` and average the ``6m`` squared second differences of ``m``-point
-  means:
-
-  .. math:: \mathrm{Mod\,Tot\,var}(\tau) = \frac{1}{2\tau^2 (N-3m+1)} \sum_{n=1}^{N-3m+1}
-      \frac{1}{6m} \sum_{i=n-3m}^{n+3m-1} \Big[\frac{1}{m}\sum_{k=i}^{i+m-1}
-      (x^\#_k - 2x^\#_{k+m} + x^\#_{k+2m})\Big]^2, \qquad 1 \le m \le N/3.
-
-  ``n_terms`` = N - 3m + 1 (subsequences).
-* ``ttotdev`` (sec. 5.2.13, eq. 28): :math:`\sigma_{TTOT}(\tau) = \tau\,
-  \mathrm{Mod}\sigma_{TOT}(\tau)/\sqrt 3` (``tau^2/3`` on the variance; SP 1065's printed
-  ``tau^3`` is a typo, as allantools notes), in the unit of ``y`` times seconds; intervals,
-  noise types and EDF are MTOTDEV's (as ``tdev`` from ``mdev``).
-* ``htotdev`` (sec. 5.2.14, Hadamard total variance; Howe et al. 2001): the MTOTDEV
-  construction applied to the rate itself. For each of the ``n - 3m + 1`` subsequences of
-  ``3m`` rate samples, remove the half-average slope (the linear drift), extend by even
-  (uninverted) reflection to ``9m`` points :math:`y^\#` and average the ``6m`` squared
-  Hadamard differences of ``m``-point means:
-
-  .. math:: \mathrm{Htot\,var}(\tau) = \frac{1}{6 (n-3m+1)} \sum_{j=1}^{n-3m+1}
-      \frac{1}{6m} \sum_{i=j-3m}^{j+3m-1} \big(\bar y^\#_{i+2m} - 2\bar y^\#_{i+m}
-      + \bar y^\#_i\big)^2, \qquad 2 \le m \le n/3;
-
-  at ``m = 1`` the overlapping Hadamard variance (Stable32's and allantools' convention).
-  ``n_terms`` = n - 3m + 1. Drift (a rate ramp) does not bias it. ``bias_corrected``
-  divides by Stable32's Htotvar/Hvar ratio for the identified noise:
-  0.995 (white FM), 0.851 (flicker FM), 0.771 (random-walk FM), 0.717 (alpha = -3),
-  0.679 (alpha = -4), 1 for PM noise and at ``m = 1``
-  (:data:`~fogbayes.stats.edf_total.HTOTVAR_BIAS`).
-* ``theo1`` (sec. 5.2.14, eq. 30): see :mod:`~fogbayes.stats.theo1`; ``m`` even,
-  ``2 <= m <= N - 1``, **tau = 0.75 m tau0** (``AllanDeviation.m`` holds m, ``tau`` the
-  Theo1 averaging time; allantools reports ``m tau0`` as its tau), ``n_terms`` = N - m.
-
-Grids (``taus``): ``"octave"`` (m = 1, 2, 4, ...; Theo1 2, 4, 8, ...), ``"decade"``
-(1, 2, 4, 10, 20, ...), ``"dense"`` (``per_decade`` log-spaced), ``"all"`` (every m; every
-even m for Theo1), or explicit averaging factors. ``m_max`` caps a named grid (default: the
-largest valid m, for TOTDEV N // 2).
-
-Noise type per tau: the lag-1 autocorrelation of :func:`~fogbayes.stats.noise_id.identify_alphas`
-at cluster size ``m`` (TOTDEV: the oadev rules; MTOTDEV/TTOTDEV: the mdev rules; Theo1: at
-``round(0.75 m)``, the averaging time it estimates), carried forward where fewer than 30
-cluster means remain. EDF: :mod:`~fogbayes.stats.edf_total` (SP 1065 Table 7, the Theo1
-fits, MTOTDEV/TTOTDEV as Stable32 1.60 computes them); interval
-:func:`~fogbayes.stats.edf.chi2_interval` at confidence ``ci``.
-
-Missing samples (NaN) are refused: the reflected extensions have no definition across a gap.
-
-Speed (O(N) per tau for TOTDEV, O(N m) for MTOTDEV and Theo1, compiled): see
-``benchmarks/bench_total.py``.
+:func:`total_deviation` returns an :class:`~fogbayes.stats.allan_result.AllanDeviation` (also
+reached through :func:`~fogbayes.stats.allan.allan_deviation`). NIST SP 1065: ``totdev`` eq. 25
+(phase reflected oddly at both ends, ``n_terms = N - 2``); ``mtotdev`` eq. 27 (``3m``-point
+subsequences, half-average slope removed, even reflection to ``9m``); ``ttotdev`` eq. 28
+(tau MTOTDEV / sqrt 3); ``htotdev`` sec. 5.2.14 (MTOTDEV's construction on the rate, ``bias_corrected``
+by :data:`~fogbayes.stats.edf_total.HTOTVAR_BIAS`); ``theo1`` (:mod:`~fogbayes.stats.theo1`,
+tau = 0.75 m tau0). Noise per tau: :func:`~fogbayes.stats.noise_id.identify_alphas`; EDF:
+:mod:`~fogbayes.stats.edf_total`; interval :func:`~fogbayes.stats.edf.chi2_interval`. NaN is refused.
 """
 
 from __future__ import annotations

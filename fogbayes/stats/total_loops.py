@@ -1,55 +1,11 @@
 r"""Compiled sums behind TOTDEV, MTOTDEV and Theo1 (Numba, CPU, one pass per cluster size).
 
-All three work on the phase in samples, :math:`S_0 = 0,\ S_k = \sum_{j<k} (y_j - \bar y)`
-(``N = n + 1`` points): the variances are in the unit of ``y`` squared and do not depend on
-the sample rate (phase ``S / f_s`` and ``tau = m / f_s`` cancel), nor on the mean of ``y``
-(removed only to keep the phase small).
-
-**TOTDEV** (NIST SP 1065 eq. 25): the phase reflected about both end points,
-:math:`x^*_{-j} = 2 S_0 - S_j` and :math:`x^*_{N-1+j} = 2 S_{N-1} - S_{N-1-j}` for
-``j = 1 .. N-2``, and
-
-.. math:: \Sigma_{tot}(m) = \sum_{i=1}^{N-2} (x^*_{i-m} - 2 x^*_i + x^*_{i+m})^2 .
-
-The interior terms (no reflection) are one SIMD loop over three slices of ``S``; only the
-``<= 2m`` terms near the ends go through the reflection. O(N) per cluster size.
-
-**MTOTDEV** (SP 1065 eq. 27): for each of the ``L = N - 3m + 1`` subsequences of ``3m``
-points, :math:`x_k = S_{i+k}`, the half-average slope is removed,
-:math:`x^0_k = x_k - s\,k` (``s`` = difference of the means of the first and last
-``floor(3m/2)`` points over their distance, ``3m/2`` or ``(3m+1)/2``), the subsequence is
-extended by even (uninverted) reflection on both sides to ``9m`` points
-:math:`x^\#` = [reversed :math:`x^0`, :math:`x^0`, reversed :math:`x^0`], and
-
-.. math:: \Sigma_{mtot}(m) = \sum_{i} \sum_{j=0}^{6m-1} w_{ij}^2, \qquad
-    w_j = F_{j+3m} - 3 F_{j+2m} + 3 F_{j+m} - F_j, \quad F_q = \sum_{l<q} x^\#_l
-
-(``w_j`` is the second difference of the ``m``-point sums of :math:`x^\#`). With the
-prefix sums :math:`c_t = \sum_{k<t} x^0_k` (``C = c_{3m}``), ``F`` is
-:math:`C - c_{3m-q}` on ``[0, 3m]``, :math:`C + c_{q-3m}` on ``[3m, 6m]`` and
-:math:`3C - c_{9m-q}` on ``[6m, 9m]``, so every :math:`w_j` is four reads of ``c``; the
-reflections make :math:`w_j = w_{3m-j}` and :math:`w_{3m+u} = w_{6m-u}`, so only
-``j <= 3m/2`` in each half is formed (``3m`` terms per subsequence instead of ``6m``).
-``c`` comes for every subsequence from one compensated prefix sum of the phase
-(:math:`P_t = \sum_{k<t} S_k` kept as a double-double ``hi + lo``, so
-:math:`P_{i+t} - P_i` is exact to rounding of its own size however long the record):
-:math:`c_t = (P_{i+t} - P_i) - t S_i - s\,t(t-1)/2` (the ``t S_i`` term, a constant offset
-of the subsequence, cancels in ``w``; it only keeps ``c`` small). Each subsequence costs
-O(m): O(N m) per cluster size, the order of the estimator itself (the detrending and the
-reflection change with ``i``, so no running sum over ``i`` carries over; allantools' loop is
-the same order in Python).
-
-**Theo1** (SP 1065 eq. 30), ``m`` even, ``h = m/2``:
-
-.. math:: \Sigma_{theo1}(m) = \sum_{i=0}^{N-m-1} \sum_{k=1}^{h} \frac{1}{k}
-    \big(S_i - S_{i+k} - S_{i+m-k} + S_{i+m}\big)^2
-
-(``k = m/2 - delta`` in SP 1065's index). For each ``k`` the inner loop over ``i`` is four
-contiguous reads (SIMD), taken in blocks of :data:`BLOCK` so the four streams stay in L1;
-O(N m / 2) per cluster size.
-
-Sums of squares are formed in pieces whose order is relaxed (``reassoc``: SIMD lanes) and
-the pieces are added with Neumaier compensation.
+On the phase in samples :math:`S_k = \sum_{j<k}(y_j - \bar y)` (units of ``y`` squared):
+TOTDEV (SP 1065 eq. 25) :math:`\sum_{i=1}^{N-2}(x^*_{i-m} - 2x^*_i + x^*_{i+m})^2` on the reflected
+phase, O(N); MTOTDEV (eq. 27) per subsequence from a double-double prefix sum of the phase, using
+the reflection symmetries of :math:`w_j`, O(N m); Theo1 (eq. 30)
+:math:`\sum_i\sum_{k=1}^{m/2}(S_i - S_{i+k} - S_{i+m-k} + S_{i+m})^2/k`, in blocks of :data:`BLOCK`.
+Pieces of squares are added with Neumaier compensation.
 """
 
 from __future__ import annotations

@@ -1,21 +1,8 @@
 """Residual whiteness: paper 002's rho_a,2 and rho_ax,3, and the Ljung-Box portmanteau test.
 
-Paper 002, eqs. 11-12 (a: model residuals, x: the modelled series, sums over the overlap;
-the paper's t = 3..N and t = 4..N, 1-based)::
-
-    rho_a,2  = sum_t a_t a_{t-2} / sum_t a_t^2
-    rho_ax,3 = sum_t a_t x_{t-3} / sqrt( sum_t a_t^2  sum_t x_{t-3}^2 )
-
-The paper calls the model adequate when both are "near 0" without a threshold. Under
-white residuals both are approximately N(0, 1/n), so we report the band z/sqrt(n) and flag
-them against it. (Note: the paper's rho_a,2 = 0.08202 on ~10^5 samples is ~25 of these
-standard errors from 0.)
-
-The verdict ``white`` requires all three checks to pass, each at level alpha/3
-(Bonferroni), so white residuals are rejected with probability <= alpha overall.
-
-Ljung-Box (1978): Q = n (n + 2) sum_{k=1}^{h} r_k^2 / (n - k), r_k the residual ACF, and
-p-value = P(chi2_{h - p - q} > Q) for residuals of a fitted ARMA(p, q).
+Paper 002 eqs. 11-12: rho_a,2 = sum a_t a_{t-2} / sum a_t^2, rho_ax,3 = sum a_t x_{t-3} /
+sqrt(sum a_t^2 sum x_{t-3}^2), each ~N(0, 1/n) under white residuals. Ljung-Box (1978):
+Q = n(n+2) sum_{k<=h} r_k^2/(n-k), p = P(chi2_{h-p-q} > Q). ``white`` needs all three at alpha/3.
 """
 
 from __future__ import annotations
