@@ -1,16 +1,9 @@
 """Residuals -> findings: candidate effects, evidence under coloured noise, model-free scans.
 
-* :mod:`.candidates` -- every docs/DESIGN.md effect name as a family of model terms;
-* :mod:`.evidence` -- bootstrap-calibrated screening under the state-space noise model;
-* :mod:`.reml` -- restricted-likelihood noise hyperparameters for the null simulations;
-* :mod:`.compete` -- candidates that explain the same residual, ranked by a bootstrap duel;
-* :mod:`.markov` -- one more Gauss-Markov noise component (start, refit, chi^2_2 p);
-* :mod:`.elpd` -- PSIS-LOO / WAIC through ArviZ;
-* :mod:`.scans` -- structure no candidate names (``unexplained``);
-* :mod:`.covariates` / :mod:`.corners` -- the block grid and the drivers, dT/dt with the
-  chamber programme's corners kept;
-* :mod:`.refine` -- a searched value refined before the decision and polished after it;
-* :mod:`.noise_prior` -- a cap on the random walk from a static run (``--noise-prior``).
+:mod:`.candidates` (effects as model terms), :mod:`.evidence` (bootstrap-calibrated screening),
+:mod:`.reml`, :mod:`.compete` (duels), :mod:`.markov`, :mod:`.elpd`, :mod:`.scans`
+(``unexplained``), :mod:`.covariates` / :mod:`.corners` (block grid, dT/dt), :mod:`.refine`,
+:mod:`.noise_prior` (``--noise-prior``).
 """
 
 from .candidates import EFFECTS, Candidate, candidates_for

@@ -1,34 +1,11 @@
 """Bootstrap Bartlett factor of a refitted likelihood ratio whose noise model changes mode.
 
-The loop refits the model with a candidate term and re-estimates the noise by maximum
-likelihood. When the current fit sits in the random-walk mode and the refit drops the walk
-(its variance goes to the lower bound: a slow term now carries the wander), the ratio
-
-    LR = 2 (logL_with - logL_without)
-
-is not chi^2_dof under "no effect": the walk variance of a local-level model piles up at zero
-whenever a slow regressor is offered, so a walk alone yields ratios of 10-20 for a drift or a
-lag in one clean record out of five (benchmarks/RESULTS_loop.md). Its null distribution is
-measured instead, by its scale (Bartlett's correction, estimated by a parametric bootstrap;
-Rocke 1989):
-
-    c = max(1, mean_k LR_k / dof),   LR_k from series simulated under the current fit,
-    LR / c  ~  chi^2_dof
-
-with both models refitted by ML on every simulated series exactly as on the data (the
-candidate's searched value held at the refined one: the search is calibrated separately by
-the screening's effective number of tests).
-
-The null ratios are right-skewed (most near 0, a few of 10-20 where the walk collapses), so
-the mean of 20 is known only to ~30 % and a decision near alpha could turn on the draw
-(measured on a 0.2 deg/h step, 200 series: c = 1.38, while 20-series means ranged 0.84-2.10
-(5-95 %); the loop had drawn 2.24 and missed the step). Given the decision it feeds
-(``decide(c)``: does LR / c pass?), the estimate is *sequential*: after every batch of 5
-series, if the decision is the same at c = mean / dof +- 2 standard errors it stops, else 5
-more are drawn, up to ``n_max`` (100: a standard error of ~13 %). The standard error is
-never taken below what the factor's own model implies (LR / c ~ chi^2_dof has variance
-2 dof c^2), so a few ratios that happen to agree cannot settle a close decision, while a
-decision far from the threshold -- most of them -- costs 5 series instead of 20.
+When a refit drops the random walk (a slow term carries the wander), LR = 2 (logL_with -
+logL_without) is not chi^2_dof under the null. Its scale is estimated by parametric bootstrap
+(Rocke 1989): c = max(1, mean_k LR_k / dof) over series simulated under the current fit, both
+models refitted by ML, and LR / c ~ chi^2_dof. Sequential: batches of 5 until the decision
+``decide(c)`` is the same at c +- 2 standard errors (floored at the chi^2 model's own, variance
+2 dof c^2), at most ``n_max``.
 """
 
 from __future__ import annotations

@@ -1,38 +1,12 @@
 """The library of candidate effects: every docs/DESIGN.md effect name as a model term.
 
-Each candidate is a small family of :class:`~fogbayes.diagnose.terms.Term` s -- one per
-value of its searched parameter -- that would be *added* to the current model (nested
-alternatives, so a likelihood ratio compares them)::
-
-    temperature_order          next power of T'                    (no search)
-    temperature_rate           dT/dt                                (no search)
-    temperature_gradient       T_j - T_0 for each other channel j   (channel searched)
-    thermal_hysteresis         tanh(dT/dt / r0), or the play        (r0 searched, deg C/min,
-                               operator's (T - P_w[T]) / (w/2)       or width w, deg C)
-    thermal_lag                L_tau[T_0]                           (tau searched, s)
-    time_drift                 t, or exp(-t / tau)                  (form and tau searched)
-    step                       1[t >= time]                         (time searched)
-    periodic                   sin, cos (2 pi f t)                  (f searched: spectral scan)
-    scale_factor_nonlinearity  next power(s) of W                   (rate table)
-    scale_factor_asymmetry     |W|
-    scale_factor_temperature   W T'^(k+1)
-
-``markov_noise`` (a free Gauss-Markov noise component) is a design effect name too, but it
-is part of the noise model, chosen apart from these candidates (:mod:`fogbayes.loop.noise_model`).
-
-Grids are coarse (the screening max over a grid is calibrated by simulation); the chosen
-value is refined afterwards (:mod:`fogbayes.diagnose.refine`). The step's time is the
-exception: it is searched at every block boundary (2-98 % of the record). Under walk- or
-flicker-dominated noise the whitened step column is nearly an impulse, so its statistic
-peaks over a few blocks only (measured ~30 s wide on a 10 s grid). A 300-time grid then
-missed the peak by 760 s (paper 004's programme at 1 Hz, 5280 blocks); the simulated null
-of the same fine search calibrates its larger number of tests.
-
-Some candidates can be the same model: where channel j is itself a first-order lag (tau_j)
-of what channel 0 lags (tau_0), L_{tau_j}[T_0] = (tau_j T_j - tau_0 T_0) / (tau_j - tau_0)
-exactly, so ``thermal_lag`` at tau = tau_j and ``temperature_gradient`` span the same space
-once T_0 is in the model. The loop then cannot tell them apart and says so (the duel's
-"indistinguishable", :mod:`fogbayes.diagnose.compete`).
+Each candidate is a family of :class:`~fogbayes.diagnose.terms.Term` s, one per value of its
+searched parameter, added to the current model (nested, so a likelihood ratio compares them):
+``temperature_order``, ``temperature_rate``, ``temperature_gradient`` (channel),
+``thermal_hysteresis`` (r0 or play width), ``thermal_lag`` (tau), ``time_drift`` (form, tau),
+``step`` (every block boundary, 2-98 % of the record), ``periodic`` (spectral scan) and the
+scale-factor effects. Grids are coarse; :mod:`fogbayes.diagnose.refine` refines the value.
+``markov_noise`` belongs to the noise model (:mod:`fogbayes.loop.noise_model`).
 """
 
 from __future__ import annotations

@@ -1,31 +1,10 @@
-"""Rank two candidate effects that explain the same residual against each other.
+"""Rank two candidate effects that explain the same residual against each other (Cox test by simulation).
 
-Both A and B improve the current model X; which of them is the effect? They are not
-nested, and a searched parameter (the tau of ``thermal_lag``, the time of ``step``) lets
-a candidate follow the noise, so the raw likelihood favours the flexible one. Both are
-compared on the whitened, X-projected block residual r (one noise model whitening both),
-each at the best value of its own grid (refined around the data's optimum as the added
-term was)::
-
-    RSS_C = min_g ( ||r||^2 - ||Q_g' r||^2 ),   Q_g an orthonormal basis of M_X Z~_g
-    D     = n_obs log(RSS_A / RSS_B)            (= 2 logL(X + B) - 2 logL(X + A))
-
-and D is calibrated by a parametric bootstrap under each hypothesis (a Cox test by
-simulation). One noise model whitens everything: the REML hyperparameters of the
-encompassing model X + A + B (correct whichever candidate is the effect). Under "A is the
-effect", r* = M_X Z~_A c_A + sqrt(s2_A) e* with c_A, s2_A the fitted A-model and e*
-whitened null series, and D* is recomputed with both grids searched again (likewise
-under B)::
-
-    p_A = P*(D* >= D | A)     small: B explains more than A's own noise lets B explain
-    p_B = P*(D* <= D | B)     small: A explains more than B's noise lets A explain
-
-Decision (level ``level``, 0.05 by default): if exactly one hypothesis is rejected, the
-other wins; if neither is, the two are *indistinguishable* -- the simpler one is kept
-(fewer searched parameters: a measured channel before a searched time constant; equal
-complexity keeps the better-ranked) and the other is reported as an alternative; if both
-are rejected, neither alone accounts for the residual: the duel's winner is the higher
-likelihood, and the loop decides by held-out prediction instead (:mod:`fogbayes.loop.ranking`).
+On the whitened, X-projected block residual r, each at its best grid value:
+RSS_C = min_g (||r||^2 - ||Q_g' r||^2), D = n_obs log(RSS_A / RSS_B); the noise is the REML
+model of X + A + B. p_A = P*(D* >= D | A), p_B = P*(D* <= D | B) by parametric bootstrap with
+both grids searched again. One rejected: the other wins; neither: *indistinguishable*, the
+simpler kept; both: decided by held-out prediction (:mod:`fogbayes.loop.ranking`).
 """
 
 from __future__ import annotations

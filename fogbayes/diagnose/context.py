@@ -1,14 +1,8 @@
-"""Everything the diagnosis needs about one recording, computed once.
+"""Everything the diagnosis needs about one recording, computed once (:class:`Context`).
 
-``Context`` holds the rate in deg/h per sample, the outlier flags, per-sample covariates,
-the uniform block grid, block means of the rate and covariates, and the noise-model
-structure. ``block_design(terms)`` gives block means of each term's per-sample columns
-(exact for linear models, cached: the loop refits the same terms many times).
-
-Outliers: robust spikes in the first difference of the rate, |d_i - median| > 6 sigma_MAD,
-with the sample at the larger excursion flagged. They are left out of block means and
-reported in the compensated output (never removed from it). A difference rule is blind to
-slow effects (thermal bias, drifts), which must not be flagged as outliers.
+Rate in deg/h, outlier flags, covariates, block grid and block means; ``block_design(terms)``
+gives cached block means of term columns. Outliers: |d_i - median| > 6 sigma_MAD on the first
+difference (blind to slow effects); left out of block means, reported, never removed.
 """
 
 from __future__ import annotations

@@ -1,34 +1,10 @@
 """Corners of a chamber programme in the temperature rate, found and kept.
 
-A chamber follows a piecewise-linear set point; a sensor behind a first-order lag tau follows
-it with tau dT/dt = T_chamber - T. So dT/dt is continuous, but its slope d2T/dt2 jumps by
-(change of ramp rate) / tau at every corner of the programme. A centred Savitzky-Golay slope
-over a window W rounds each such corner over +-W/2: on the 16x hysteresis records of the
-loop's sweep its error reached 0.04 deg C/min just where dT/dt crosses zero, against a tanh
-scale r0 of 0.05 deg C/min.
-
-Scan, at every block j of the block-mean temperature (n blocks = one window each side)::
-
-    T(t) = a + b d + c d^2 + c_jump d^2 [d >= 0],   d = t - t_j
-
-is value- and slope-continuous at t_j with a free curvature jump (one column more than the
-quadratic). Its RSS gain over the quadratic, divided by the block noise variance s2, is
-chi2_1 without a corner. Corners are local maxima (within +-n blocks) of the gain above
-the Bonferroni threshold chi2_1 upper quantile at alpha / N (alpha = 0.01): a record
-without corners gets a false one with probability < 1 %. s2 is the median of the
-four-column window RSS over the median of chi2_(2n+1-4), robust to the corners themselves.
-Each corner is refined to dt/8 within one block, and within W/2 + dt of it the rate is the
-fitted derivative b + 2 c d + 2 c_jump max(d, 0), which keeps the kink. A strong corner may
-be followed by weaker ones where the lag's curvature decays (exp(-t / tau) is not quadratic
-over two windows); there the kinked fit is simply the better local fit.
-
-The block means must sit at their block centres (``covariates.centred_block_temperature``): on a
-steep ramp a mean time off the centre by one sample looks like a corner.
-
-Measured on a lagged two-ramp programme (tests/test_diagnose_corners.py, 0.01 deg C noise):
-max rate error 0.036-0.037 -> 0.007-0.008 deg C/min at 10 Hz, 0.042-0.045 -> 0.022-0.026 at
-2 Hz, 0.045-0.049 -> 0.021-0.034 at 1 Hz (seeds 0 and 1); on a smooth sinusoidal
-temperature nothing is replaced.
+Behind a first-order lag, d2T/dt2 jumps at each corner of a piecewise-linear set point. At
+every block the fit T = a + b d + c d^2 + c_jump d^2 [d >= 0] (d = t - t_j) gains over the
+quadratic RSS / s2 ~ chi2_1 without a corner; corners are local maxima above the Bonferroni
+threshold at alpha / N (alpha = 0.01), refined to dt/8, and within W/2 + dt the rate is the
+fitted derivative. Block means must sit at block centres (``covariates.centred_block_temperature``).
 """
 
 from __future__ import annotations

@@ -1,35 +1,10 @@
 """Covariates of a recording and the uniform block grid the evidence works on.
 
-Block grid: a uniform grid of ``dt`` seconds from the first sample (``dt`` a whole number of
-sample intervals), so the noise model's time step is constant; blocks without samples
-(gaps, bursts) are *missing*, never filled. Block b holds samples with
-floor((t_i - t_0) / dt) = b; its value is the mean of its unflagged samples and its white
-noise variance scales as 1 / count (weight w_b = m_ref / count_b)::
-
-    ybar_b = (1 / m_b) sum_{i in b} y_i,    Var_white(ybar_b) = s2 m_ref / m_b
-
-Block means of a design column are exact for linear models: the block-mean model of
-y = X beta + noise is ybar = Xbar beta + noise-bar.
-
-Temperature rate dT/dt (deg C/min, first channel): Savitzky-Golay (order 2) derivative of
-the block-mean temperature (the filter of ``fogbayes fit``,
-:func:`fogbayes.preprocess.temperature_rate.savgol_slope_grid`) over ``rate_window_s``
-(60 s by default: long enough that sensor noise and 0.01 deg C quantization stay below
-~0.005 deg C/min, short against the ~300 s sensor lags of chamber tests), interpolated
-back to every sample by a cubic spline; near a corner of the chamber programme (a jump of
-d2T/dt2, found by a scan at family-wise alpha 0.01, :mod:`fogbayes.diagnose.corners`) the
-slope of a fit whose curvature jumps there replaces it, so the kink of dT/dt is kept
-instead of rounded over the window.
-
-The window is centred, so the estimate has no lag. It is exact on a ramp (any quadratic
-T); its leading error is the window's curvature bias (H^2 / 10) d3T/dt3, H the half window,
-which on a first-order lag's transient (d3T/dt3 = -d2T/dt2 / tau) looks like a delay of
-H^2 / (10 tau): 0.3 s for the 60 s window and a 300 s sensor. A causal window would trail
-every ramp by about H and so split heating from cooling, as hysteresis does. The
-simulator plants rate effects on the exact rate of the true temperature
-(:func:`fogbayes.simulate.profiles.sensor_rates`); on the README tour's record (ramps of
-6.3 deg C/min) this estimate is within 0.021 deg C/min of it (rms 0.0033), checked in
-tests/test_temperature_rate_truth.py.
+Blocks of ``dt`` s from the first sample; empty blocks are missing, never filled.
+ybar_b = mean of the unflagged samples, Var_white(ybar_b) = s2 m_ref / m_b. dT/dt (deg C/min,
+first channel): centred Savitzky-Golay slope (order 2) over ``rate_window_s``
+(:func:`fogbayes.preprocess.temperature_rate.savgol_slope_grid`), spline-interpolated to the
+samples, with kinks at programme corners kept (:mod:`fogbayes.diagnose.corners`).
 """
 
 from __future__ import annotations

@@ -1,16 +1,8 @@
-"""Expected log predictive density (PSIS-LOO and WAIC by ArviZ) of a fitted model.
+"""Expected log predictive density (PSIS-LOO, WAIC by ArviZ) of a fitted model.
 
-The pointwise log-likelihood is that of the block means' one-step-ahead predictive
-densities from the Kalman filter (a prequential score: it respects the coloured noise),
-
-    log p(ybar_t | ybar_<t, beta_s) = log N(v_t(beta_s); 0, s2 F_t),   v_t(beta) = v_t^y - V_t^X beta,
-
-for draws beta_s from the GLS posterior N(beta_hat, s2 S_XX^-1) (flat prior), noise
-hyperparameters at their ML values. The information criteria are
-:mod:`fogbayes.inference.compare`'s: elpd_loo with its standard error, and the difference
-of two models with the standard error of the pointwise differences.
-Where PSIS fails (NaN: a model far from the data gives wild importance ratios) the
-comparison falls back to WAIC, and says so (``ic``).
+Pointwise: log N(v_t(beta_s); 0, s2 F_t), the Kalman one-step-ahead predictive of the block
+means, beta_s ~ N(beta_hat, s2 S_XX^-1), noise at ML. Criteria as
+:mod:`fogbayes.inference.compare`; where PSIS gives NaN, WAIC (stated in ``ic``).
 """
 
 from __future__ import annotations

@@ -1,37 +1,11 @@
 """Evidence for adding a candidate effect under coloured noise.
 
-Screening (noise hyperparameters fixed at the current model's ML values theta): the Kalman
-filter whitens y, the design X and every candidate column Z_g (one pass, shared gains),
-so under the model the whitened residual r = M y~ (M projects out X~) is iid N(0, s2) and
-adding Z_g raises the profile log-likelihood by
-
-    stat_g = 2 dlogL = || Q_g' r ||^2 / s2,        Q_g an orthonormal basis of M Z~_g,
-
-which is chi^2_k under the null for a fixed grid point (k = columns). ``periodic`` uses the
-periodogram of r instead, 2 |sum_t r_t e^{-i w t}|^2 / (n s2) ~ chi^2_2 at each frequency.
-
-Searched parameters (step time, lag tau, frequency, ...) are selected by the data, so a
-candidate's evidence is the *minimum* p-value over its grid, calibrated by a parametric
-bootstrap of that minimum under the fitted noise model: ``n_sims`` series are drawn from
-the state-space model itself and whitened by the same filter (exactly iid N(0,1)), all
-grid statistics are computed for all of them at once (one matrix product; FFTs for the
-periodogram), and the simulated minima fix an effective number of independent tests::
-
-    P(min_g p_g <= u) = 1 - (1 - u)^M_eff          (M_eff from the simulated median)
-
-so the calibrated p-value extrapolates to the small levels a decision needs. Candidates
-are then compared on one scale (log of the calibrated p), and the family of C candidates
-is controlled by Sidak: p_fw = 1 - (1 - p_c)^C.
-
-The loop passes the current model with its REML noise hyperparameters
-(:mod:`fogbayes.diagnose.reml`): ML ones leave too little slow noise in the simulated
-series and make slow candidates look significant too often.
-
-Decision (stated in every step's JSON ``evidence``): a candidate's refitted model (noise
-re-estimated, searched value refined) must give p_fw < alpha from its likelihood ratio
-2 (logL_with - logL_without), AND a positive ELPD difference by PSIS-LOO (ArviZ) on the
-one-step-ahead predictive densities of the block means; candidates that pass are ranked
-against each other by :mod:`fogbayes.diagnose.compete`.
+With noise fixed at the current fit, the Kalman filter whitens y, X and each candidate Z_g:
+stat_g = ||Q_g' r||^2 / s2 ~ chi^2_k (Q_g a basis of M Z~_g; ``periodic``: the periodogram,
+chi^2_2). The min p over a grid is calibrated by parametric bootstrap under the REML noise
+model (:mod:`fogbayes.diagnose.reml`): P(min p <= u) = 1 - (1 - u)^M_eff; C candidates by
+Sidak, p_fw = 1 - (1 - p_c)^C. Acceptance: refitted LR gives p_fw < alpha AND PSIS-LOO ELPD
+difference > 0; survivors are ranked by :mod:`fogbayes.diagnose.compete`.
 """
 
 from __future__ import annotations

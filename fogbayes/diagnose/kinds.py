@@ -1,32 +1,10 @@
-"""One definition per term kind: its columns, labels, physical description and whether it
-describes the sensor or the run.
+"""One definition per term kind: columns, labels, physical description, sensor or run.
 
-Every model term -- of a base model, a loop candidate, a calibration applied to a new run,
-or an effect the simulator plants -- is a :class:`~fogbayes.diagnose.terms.Term`
-(``kind`` + JSON-able ``params``) whose behaviour is the :class:`Kind` registered here under
-``kind``. All columns are centred/scaled to O(1); the coefficient of each is in deg/h::
-
-    intercept     1
-    tpoly         ((T_c - centre) / scale)^k, k in powers            (bias polynomial)
-    rate          (dT/dt) / scale                                    (Shupe, deg C/min)
-    rate_poly     ((dT/dt) / scale)^k                                (paper 004 rate terms)
-    t_rate        ((T_c - centre) / scale) (dT/dt) / rate_scale      (paper 004 cross term)
-    gradient      (T_b - T_a) / scale                                (two channels)
-    hysteresis    tanh((dT/dt) / r0)                                 (+heating / -cooling)
-    play          (T_c - P_w[T_c]) / (w / 2), P_w the play operator     (memory hysteresis)
-    lag           (L_tau[T_c] - centre) / scale, tau dL/dt = T - L   (first-order lag)
-    drift_lin     t / duration                                       (run event)
-    drift_exp     exp(-t / tau)                                      (warm-up since power-on)
-    periodic      sin(2 pi f t), cos(2 pi f t)                       (run event)
-    step          1[t >= time]                                       (run event)
-    omega_poly    (W / scale)^k                                      (rate table)
-    omega_abs     |W| / scale
-    omega_tpoly   (W / scale)^m ((T - centre) / t_scale)^k           (m = wpower, default 1)
-    drift_tpoly   (t_op / duration) ((T - centre) / scale)^k         (paper 000's U1(T) t)
-
-``applies``: ``"sensor"`` for a property of the sensor (carried to a new run by a
-calibration), ``"run"`` for an event of one run's own clock (a step, a drift across the run,
-a periodic disturbance with that run's phase).
+Every :class:`~fogbayes.diagnose.terms.Term` (``kind`` + ``params``) behaves as the :class:`Kind`
+registered under ``kind``; columns are scaled to O(1), coefficients in deg/h. Kinds: intercept,
+tpoly, rate, rate_poly, t_rate, gradient, hysteresis (tanh(dT/dt / r0)), play, lag (tau dL/dt =
+T - L), drift_lin, drift_exp, periodic, step, omega_poly, omega_abs, omega_tpoly, drift_tpoly.
+``applies``: ``"sensor"`` (carried by a calibration) or ``"run"`` (an event of one run).
 """
 
 from __future__ import annotations

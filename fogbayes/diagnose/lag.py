@@ -1,14 +1,8 @@
-"""First-order lag of a sampled signal: the one implementation (simulator, loop, calibration).
+"""First-order lag of a sampled signal, tau dL/dt = u - L (the one implementation).
 
-    tau dL/dt = u - L,  L(t_0) = initial (default u(t_0): in equilibrium at the start)
-
-exact for u linear between samples, at any spacing::
-
-    L_k = a_k L_{k-1} + (1 - c_k) u_k + (c_k - a_k) u_{k-1},
-    a_k = exp(-h_k / tau),  c_k = tau (1 - a_k) / h_k,  h_k = t_k - t_{k-1}
-
-Uniform steps: ``scipy.signal.lfilter`` (no compilation); otherwise the time-varying
-recursion by an associative scan (JAX, O(n log n), imported only then).
+Exact for u linear between samples: L_k = a_k L_{k-1} + (1 - c_k) u_k + (c_k - a_k) u_{k-1},
+a_k = exp(-h_k / tau), c_k = tau (1 - a_k) / h_k. Uniform steps by ``scipy.signal.lfilter``,
+otherwise an associative scan (JAX).
 """
 
 from __future__ import annotations

@@ -1,16 +1,8 @@
-"""``markov_noise``: does one more first-order Gauss-Markov component improve the noise model?
+"""``markov_noise``: does one more first-order Gauss-Markov noise component improve the fit?
 
-The component (relative variance v, time constant tau_c) starts from the point of a grid
-(tau_c log-spaced from 2 dt to a quarter of the record, v from 1e-3 to 1e3 of the white
-block variance) that maximises the likelihood with the current noise hyperparameters
-theta kept (one compiled, vmapped call evaluates the whole grid), then every noise
-hyperparameter is refitted.
-
-The decision uses the refitted likelihood ratio, whose null distribution is heavier than
-the fixed-tau_c boundary mixture (0.5 chi^2_0 + 0.5 chi^2_1, Self & Liang 1987): measured
-by running the loop on 56 pure-noise records (four noise mixes, 3-6 h, 1-10 Hz) it has
-mean 1.8, 7 % above 5 and 1 of 56 above 8.3 -- a chi^2_2 (mean 2,
-P(> 5) = 8 %, P(> 8.3) = 1.6 %), not the fixed-tau mixture. :func:`markov_log_p` uses chi^2_2.
+Start: the best point of a (tau_c, v) grid with the other noise hyperparameters kept (one
+vmapped call), then all refitted. :func:`markov_log_p` refers the refitted likelihood ratio to
+chi^2_2 (heavier than the fixed-tau_c mixture of Self & Liang 1987; benchmarks/RESULTS_loop.md).
 """
 
 from __future__ import annotations

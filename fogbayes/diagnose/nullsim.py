@@ -1,19 +1,9 @@
-"""Null simulations and grid likelihoods under the state-space noise model of
-:mod:`fogbayes.inference.noise_ssm` (its filter, its system matrices; nothing re-derived).
+"""Null simulations and grid likelihoods under :mod:`fogbayes.inference.noise_ssm`'s model.
 
-* :func:`simulate` draws noise series from a fitted :class:`~fogbayes.inference.noise_ssm.NoiseSpec`
-  (NumPy, every component an independent AR(1)/random walk by ``lfilter``; ``noise_ssm``
-  has likelihoods only, no sampler);
-* :func:`column_logliks` evaluates the profile log-likelihood of many response columns
-  under many hyperparameter vectors: ``noise_ssm.whiten_raw`` (the model's own Kalman
-  filter, one pass over [X, Y] per hyperparameter vector) followed by one GLS per column::
-
-      S_XX = sum_t m_t v^X_t v^X_t' / F_t,   S_Xy = sum_t m_t v^X_t v^y_t / F_t
-      RSS  = sum_t m_t r_t^2 / F_t,  r_t = v^y_t - v^X_t' B,
-      log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n]
-
-  (the same profile as ``noise_ssm.gls``, per column). The start of a Gauss-Markov
-  component (:func:`fogbayes.diagnose.markov.markov_start`) uses it too.
+:func:`simulate` draws series from a :class:`~fogbayes.inference.noise_ssm.NoiseSpec` (each
+component an AR(1)/walk by ``lfilter``). :func:`column_logliks` gives the profile log-likelihood
+of many columns under many hyperparameters: ``noise_ssm.whiten_raw`` then GLS per column,
+log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n].
 """
 
 from __future__ import annotations

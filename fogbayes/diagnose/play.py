@@ -1,12 +1,7 @@
 """The play (backlash) operator: a rate-independent hysteresis with memory.
 
-    P_k = min(max(P_{k-1}, u_k - h), u_k + h),  P_0 = u_0,  h = width / 2
-
-P follows u only once u has moved h past it, so after heating P = u - h, after cooling
-P = u + h, and through a soak P keeps the value the last ramp left: the bias of a sensor
-whose state depends on the direction it last came from (a memory hysteresis), unlike
-tanh(dT/dt / r0), which returns to zero in every soak. The loop's column is
-(u - P) / h: +1 after heating, -1 after cooling, the same sign as the rate-type term.
+P_k = min(max(P_{k-1}, u_k - h), u_k + h), P_0 = u_0, h = width / 2. The loop's column is
+(u - P) / h: +1 after heating, -1 after cooling, held through a soak.
 """
 
 from __future__ import annotations

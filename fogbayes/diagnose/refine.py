@@ -1,34 +1,10 @@
 """Refine a screened candidate's searched parameter between its grid neighbours.
 
-The screening grid of a scale or a frequency is coarse; the value that is finally added is
-the maximiser of the same fixed-noise statistic (2 dlogL, see
-:mod:`fogbayes.diagnose.evidence`) on a fine local grid, all evaluated in one filter pass:
-
-* step time: every block boundary between the neighbouring grid times. The step grid is
-  already every block boundary (:func:`fogbayes.diagnose.candidates.time_candidates`), so
-  this only re-checks the two adjacent boundaries; it is kept for grids built otherwise;
-* tau (thermal_lag, time_drift), r0 (thermal_hysteresis): 25 log-spaced values spanning
-  the neighbouring grid values;
-* frequency (periodic): 41 values within +-1 bin of the zero-padded FFT peak. A phase
-  error 2 pi df T must stay << 1 rad over the record, which the FFT bin alone cannot give.
-
-The screening sees a step on block means as 0 or 1 per block, so its time lands on a block
-boundary. A large step inside a block then leaves that block half-stepped, and the loop
-would add a second step beside the first to mend it. :func:`polish_step` places an
-accepted step's time to a twentieth of a block, with the exact block columns (the block
-mean of the per-sample 1[t >= time], a fraction in the block that holds the step), under
-the noise of the refit, and keeps it only if the refitted likelihood rises. It runs after
-the decision, so the evidence and its calibration are those of the block-boundary refit.
-
-The same holds for a searched scale (tau of ``thermal_lag`` and ``time_drift``, r0 of
-``thermal_hysteresis``): it was refined under the noise of the model *without* it, and a
-large effect moves that noise (the base fit's flicker and walk take up part of it). On the
-16x hysteresis records of the loop's sweep, r0 refined to 0.058 where the refitted
-likelihood peaks at the true 0.05 (logL 1305.0 vs 1314.4, final RMS 1.12 x the oracle's).
-:func:`polish` re-scores such a value on a fine grid (ratio 1.5 either side, 25 values,
-re-centred up to :data:`RECENTRE_ROUNDS` times while the best is at an edge) under the refit's
-noise and keeps the refit of the best if the likelihood rises, repeated under each new
-refit's noise until the value stops moving.
+Maximises the fixed-noise statistic of :mod:`fogbayes.diagnose.evidence` on a fine local grid:
+block boundaries (step), 25 log-spaced values (tau, r0), 41 frequencies within +-1 FFT bin.
+After the decision, :func:`polish_step` places a step to 1/20 block and :func:`polish` re-scores
+a scale (ratio 1.5 each side, up to :data:`RECENTRE_ROUNDS` re-centrings) under the refit's
+noise; each is kept only if the refitted likelihood rises.
 """
 
 from __future__ import annotations

@@ -1,20 +1,9 @@
 """Restricted (REML) noise hyperparameters for the evidence's null simulations.
 
-Maximum likelihood with the regression profiled out underestimates the slow noise: the
-design (intercept, temperature polynomial, ...) is itself slow and takes up part of the
-flicker / random-walk power, so series simulated from the ML noise model wander less than
-the gyro does and a slow candidate column looks significant too often (measured on the
-study's 3 h, 10 Hz default-noise records with the true model fitted: fixed-noise
-screening p < 0.05 in 8-21 % of records per candidate instead of 5 %). The restricted
-likelihood (Patterson & Thompson 1971) counts the degrees of freedom the design uses::
-
-    log L_R = -1/2 [ (n - p) log(2 pi s2_R) + sum_t m_t log F_t + log det S_XX + (n - p) ],
-    s2_R = RSS / (n - p),   S_XX = X' Sigma^-1 X / s2 (Kalman innovations of X),
-
-with the same filter as :mod:`fogbayes.inference.noise_ssm` (``whiten_raw``). REML
-likelihoods of models with different designs are not comparable, so the loop keeps the
-ML (profile) likelihood for its likelihood ratios and uses REML only for the noise model
-under which the screening and the duels whiten and simulate.
+log L_R = -1/2 [(n - p) log(2 pi s2_R) + sum_t m_t log F_t + log det S_XX + (n - p)],
+s2_R = RSS / (n - p) (Patterson & Thompson 1971; filter of :mod:`fogbayes.inference.noise_ssm`).
+ML underestimates slow noise the design absorbs; REML is used only for whitening and
+simulating, ML likelihoods for the ratios.
 """
 
 from __future__ import annotations

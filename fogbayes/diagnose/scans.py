@@ -1,30 +1,11 @@
 """Model-free scans of the final residual for structure no candidate names (``unexplained``).
 
-The spectral, change-point and autocorrelation scans are calibrated by simulation: the
-statistic is computed on the residual and on ``n_sims`` series drawn from the fitted
-noise model and passed through the same GLS fit, p = (1 + #{sims >= observed}) /
-(1 + n_sims). A scan is reported when p is below alpha / (number of scans of its kind).
-
-* ``covariate``: for each covariate and its time derivative, the model refitted with a
-  smooth function of it (Legendre P_1..P_6, noise re-estimated); likelihood ratio
-  ~ chi^2_k under "the residual does not depend on it" (reported below alpha / scans, and
-  only if the same test at the current noise model is below 0.1 / scans); the fitted
-  function at 10 quantile points with its GLS standard error is reported.
-* ``spectral_line``: (a) periodogram of the whitened block residual, 2|DFT|^2/(n s2),
-  maximum over frequencies; (b) above the block Nyquist frequency, the periodogram of the
-  per-sample residual against its running-median background, R_k = P_k ln2 / med_k
-  ~ Exp(1) per bin, false-alarm probability 1 - (1 - e^{-R_max})^M over M bins.
-* ``change_point``: CUSUM of the whitened residual (mean) and of its square (variance),
-  max_k |S_k| / sqrt(n).
-* ``autocorrelation``: Ljung-Box Q over lags 1..20 of the whitened residual.
-* ``noise_model_at_bound``: a flicker or random-walk variance of the fitted noise model at
-  the *upper* end of its search range (:data:`fogbayes.inference.noise_ssm.LOG_BOUNDS`):
-  the residual holds more slow structure than any noise of that kind, so the evidence of
-  every step is unreliable (measured: paper 000's scenario under the default composite
-  orders keeps the walk at its bound through six steps, and the sixth raised the 10 s RMS
-  from 204 to 521 deg/h). No test: the bound is reached or not. Under a noise prior the
-  walk's bound is the prior's cap (:mod:`fogbayes.diagnose.noise_prior`), and reaching it
-  says the record wanders more than the static run allows.
+Each is calibrated by simulation under the fitted noise, p = (1 + #{sims >= obs}) / (1 + n_sims),
+reported below alpha / (scans of its kind): ``covariate`` (Legendre P_1..P_6 of each covariate,
+LR ~ chi^2_k), ``spectral_line`` (whitened periodogram; above block Nyquist R_k = P_k ln2 / med_k),
+``change_point`` (CUSUM of r and r^2), ``autocorrelation`` (Ljung-Box, lags 1..20),
+``noise_model_at_bound`` (a slow variance at its upper bound,
+:data:`fogbayes.inference.noise_ssm.LOG_BOUNDS` or :mod:`fogbayes.diagnose.noise_prior`'s cap).
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
-"""Model terms: every column a base model, a loop candidate, a calibration or a simulated
-effect puts in a design matrix.
+"""Model terms: every column a base model, candidate, calibration or simulated effect uses.
 
-A :class:`Term` is data (``kind`` + JSON-able ``params``); what it means -- its columns,
-labels, physical description and whether it is a property of the sensor or an event of
-one run -- is the :class:`~fogbayes.diagnose.kinds.Kind` registered under ``kind`` (the
-table of every kind's column is in :mod:`fogbayes.diagnose.kinds`). :func:`columns`
-evaluates a term on :class:`~fogbayes.diagnose.covariates.Covariates` at any resolution
-(samples or blocks), so the same term is screened on blocks, fitted on block means of its
-per-sample columns and used to compensate every sample.
+A :class:`Term` is data (``kind`` + ``params``); its meaning is the
+:class:`~fogbayes.diagnose.kinds.Kind` registered under ``kind``. :func:`columns` evaluates it on
+:class:`~fogbayes.diagnose.covariates.Covariates` at samples or blocks.
 """
 
 from __future__ import annotations
