@@ -2,7 +2,8 @@
 
 Every subcommand lives in its own module and registers itself on :data:`app`. ``main``
 turns a :class:`~fogbayes.errors.FogbayesError` (bad input) into one line on stderr and
-exit code 2, never a traceback. SIGTERM is turned into ``SystemExit(143)`` while a command
+exit code 2, never a traceback; a usage error (a missing option, an unknown command) is one
+line too, naming the command's ``--help``, not click's usage box. SIGTERM is turned into ``SystemExit(143)`` while a command
 runs, and SIGINT (Ctrl-C) into ``SystemExit(130)`` with one line ``fogbayes: interrupted``,
 so that the atomic writers of
 :mod:`fogbayes.data.atomic` remove their temporary files: a killed command leaves the old
@@ -11,11 +12,25 @@ output or none, never a truncated one.
 
 from __future__ import annotations
 
+import errno
 import signal
 import sys
 import threading
 
 import typer
+
+from typer import Abort as _Abort
+
+try:  # typer >= 0.23 carries its own click
+    from typer._click.exceptions import ClickException as _ClickException
+    from typer._click.exceptions import NoArgsIsHelpError as _NoArgsIsHelp
+    from typer._click.exceptions import UsageError as _UsageError
+    from typer._click.utils import PacifyFlushWrapper as _PacifyFlushWrapper
+except ImportError:  # pragma: no cover - typer on the click package
+    from click.exceptions import ClickException as _ClickException
+    from click.exceptions import NoArgsIsHelpError as _NoArgsIsHelp
+    from click.exceptions import UsageError as _UsageError
+    from click.utils import PacifyFlushWrapper as _PacifyFlushWrapper
 
 from ..data.atomic import Stopped, clear_stop
 from ..errors import FogbayesError
@@ -69,6 +84,24 @@ def _interrupted(signum, frame):
     raise Interrupted(128 + signum)
 
 
+def _usage_line(exc) -> str:
+    """A click usage error (missing option, no such command, invalid value) in one line:
+    the command, what is wrong and where the options are listed."""
+    where = exc.ctx.command_path if exc.ctx is not None else "fogbayes"
+    msg = " ".join(exc.format_message().split()).rstrip(".")
+    end = "" if msg.endswith("?") else "."  # "Did you mean 'fit'?"
+    return f"{where}: {msg}{end} Fix: see '{where} --help'"
+
+
+def _show_help(exc) -> None:
+    try:
+        from typer import rich_utils
+
+        rich_utils.rich_format_error(exc)
+    except ImportError:  # typer without rich
+        exc.show()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``fogbayes`` script; returns the exit code."""
     installed, previous, previous_int = False, None, None
@@ -76,12 +109,29 @@ def main(argv: list[str] | None = None) -> int:
         previous, installed = signal.signal(signal.SIGTERM, _terminated), True
         previous_int = signal.signal(signal.SIGINT, _interrupted)
     try:
-        # standalone mode: click prints usage errors itself and exits with code 2.
-        app(args=argv, prog_name="fogbayes", standalone_mode=True)
+        # not standalone: a usage error is ours to print, in one line (_usage_line)
+        code = app(args=argv, prog_name="fogbayes", standalone_mode=False)
+        return code if isinstance(code, int) else 0
+    except _NoArgsIsHelp as exc:  # 'fogbayes' alone: the help, as click shows it
+        _show_help(exc)
+        return exc.exit_code
+    except _UsageError as exc:
+        print(f"fogbayes: error: {_usage_line(exc)}", file=sys.stderr)
+        return exc.exit_code
+    except _ClickException as exc:
+        print(f"fogbayes: error: {' '.join(exc.format_message().split())}", file=sys.stderr)
+        return exc.exit_code
+    except _Abort:  # end of input where the command read some
+        print("fogbayes: aborted", file=sys.stderr)
+        return 1
     except FogbayesError as exc:
         print(f"fogbayes: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:  # a path the user named cannot be read or written
+        if exc.errno == errno.EPIPE:  # the reader of stdout went away (| head): quietly
+            sys.stdout = _PacifyFlushWrapper(sys.stdout)
+            sys.stderr = _PacifyFlushWrapper(sys.stderr)
+            return 1
         where = f"{exc.filename}: " if exc.filename else ""
         print(f"fogbayes: error: {where}{exc.strerror or exc}. Fix: check the path and its "
               "folder's permissions", file=sys.stderr)
