@@ -1,11 +1,8 @@
 """Run the loop with single-threaded OpenBLAS (what ``threadpoolctl.threadpool_limits(1)`` does).
 
-The loop interleaves many small NumPy/SciPy linear-algebra calls with XLA computations.
-Idle OpenBLAS worker threads spin-wait after each call and steal the cores XLA needs:
-measured on the 2-core machine, a 3 h record took 31 s with the default BLAS threads and
-18 s with one. The OpenBLAS copies bundled with NumPy and SciPy are found among the
-loaded libraries and set through their ``*_set_num_threads`` entry points; where that is
-not possible (another BLAS), nothing changes -- only speed depends on it.
+Idle OpenBLAS threads spin between the loop's small linear-algebra calls and take the cores
+XLA needs. The OpenBLAS copies bundled with NumPy and SciPy are set through their
+``*_set_num_threads`` entry points; with another BLAS nothing changes (only speed depends on it).
 """
 
 from __future__ import annotations

@@ -1,17 +1,9 @@
 """ADEV misfit: the ``allan`` base model's residual, before and after each added noise term.
 
-The overlapping Allan deviation of the rate (octave taus, 90 % chi-square intervals from
-:func:`fogbayes.stats.allan.allan_deviation`) is compared with the five-term model plus
-the terms the loop added (paper 002 table 1)::
-
-    AVAR_model(tau) = sum_{n=-2..2} a_n tau^n + sum_added AVAR_term(tau),   a_n >= 0
-
-with the added terms fixed at the loop's estimates (Markov sigma, T_c; sinusoid A, f) and
-the a_n fitted by non-negative least squares on the relative AVAR misfit. The misfit is
-the RMS of (log ADEV_emp - log ADEV_model) in units of each point's log-interval
-half-width / 1.645 (a standard error): about 1 when the model is adequate. Only taus of at
-least ``tau_min`` enter (the loop's block length: shorter taus are not what it models).
-``rms_dex`` is the plain RMS of log10(ADEV_emp / ADEV_model).
+AVAR_model(tau) = sum_{n=-2..2} a_n tau^n + sum_added AVAR_term(tau), a_n >= 0 by NNLS, the
+added terms fixed (paper 002 table 1). Misfit: RMS of (log ADEV_emp - log ADEV_model) in
+standard errors (log-interval half-width / 1.645; ~1 when adequate) over tau >= ``tau_min``;
+``rms_dex`` the plain RMS of log10(ADEV_emp / ADEV_model).
 """
 
 from __future__ import annotations

@@ -1,33 +1,12 @@
 """Base models the loop starts from, as term lists, and which effects each may gain.
 
-    bias-t     b = c0 + sum_{k<=n} c_k T'^k                       (n = 2 by default, paper 004)
-    thermal    bias-t + sum_{j<=m} d_j (dT/dt)'^j                 (paper 004, eq. 14; m = 2)
-    composite  U = S1(T) S2(W) W + U0(T) [+ U1(T) t]  linearised  (paper 000); orders
-               "s1,s2,u0[,u1]" give W' T'^i (i <= s1), W'^(j+1) (j <= s2), T'^i (i <= u0),
-               t' T'^i (i <= u1); the grammar of ``fogbayes fit -m composite``
-               (:func:`fogbayes.composite.model.read_orders`): three values set u1 = u0,
-               u1 = "-" leaves the drift term out. Default "0,0,2,-": a linear scale
-               factor and a quadratic bias, so every scale-factor effect is something the
-               loop can find.
-    allan      a constant bias; the noise model (white + flicker + random walk) is the
-               five-term model, and the loop may add only noise terms: a Gauss-Markov
-               component or a sinusoid (``markov_noise``, ``periodic``).
-
-Orders use ``fogbayes fit``'s grammar (:mod:`fogbayes.thermal.workflow`): bias-t "n";
-thermal "n" (T and dT/dt both n) or "n,m"; ``fogbayes fit --estimator gls`` is this loop's
-fit of these terms with no step added (:mod:`fogbayes.loop.gls_fit`).
-
-T' = (T - centre) / scale and W' = W / max|W| (centred, scaled bases). On a soaked
-record (T spans < 0.1 deg C) the temperature terms are left out: no T law is identifiable.
-
-Why ``bias-t`` starts at order 2 here while ``fogbayes fit --model bias-t`` defaults to 3
-(:mod:`fogbayes.thermal.workflow`): the fit has no way to ask whether a higher power is
-supported, so it takes a safe order (or chooses one with ``auto``); the loop does ask --
-``temperature_order`` is one of its candidates and is added only on calibrated evidence.
-Starting from the paper 004 order (2) lets the loop show a cubic as a justified step with
-its before/after RMS, where starting at 3 would hide it in the base model; the simulator's
-``temperature_order`` effect (a cubic on top of the scenarios' quadratic) is written for
-that base. ``--orders 3`` gives the workflow's start.
+bias-t: c0 + sum_{k<=n} c_k T'^k (n = 2, paper 004); thermal: bias-t + sum_{j<=m} d_j (dT/dt)'^j
+(paper 004 eq. 14); composite: U = S1(T) S2(W) W + U0(T) [+ U1(T) t] linearised (paper 000;
+orders "s1,s2,u0[,u1]", :func:`fogbayes.composite.model.read_orders`, default "0,0,2,-");
+allan: a constant, only noise terms may be added. T' = (T - centre) / scale, W' = W / max|W|;
+temperature terms are left out when T spans < 0.1 deg C. Orders grammar of
+:mod:`fogbayes.thermal.workflow`; bias-t starts at 2 so a cubic is a loop step
+(``temperature_order``).
 """
 
 from __future__ import annotations

@@ -1,34 +1,11 @@
 """The loop's final model as a calibration: written into the loop document, applied to new runs.
 
-``fogbayes loop --json`` writes, beside the story of the loop, a ``calibration`` section
-(schema ``fogbayes.loop/1``) that ``fogbayes compensate --params`` applies to *another*
-recording of the same sensor::
-
-    "calibration": {
-      "family": "bias" | "composite",
-      "terms": [{"kind", "effect", "params", "labels", "applies": "sensor" | "run"}, ...],
-      "coefficients": [...],          # deg/h, on the centred/scaled columns of the terms
-      "stderr": [...], "covariance": [[...]],
-      "processing": {...},            # time origin, block, dT/dt estimator, outlier rule
-      "valid": {...},                 # temperature per channel, dT/dt, input rate, span
-      "noise": {...}                  # the loop's noise model (white level, components)
-    }
-
-The model is the loop's final GLS fit (:func:`fogbayes.diagnose.fitting.fit_terms`):
-``bias(t) = sum_j X_j(cov(t)) c_j`` with the term columns of :mod:`fogbayes.diagnose.terms`
-evaluated on the new recording's own covariates (the same pipeline as the loop: block grid,
-Savitzky-Golay dT/dt with the chamber's corners kept, first-order lags started at the first
-sample). Compensation: bias family ``output - bias`` (in the input unit); composite family
-the input rate W solving ``U = f(W, T, t)`` by the composite family's Halley solver
-(:func:`fogbayes.loop.compensate.solve_rate`).
-
-Sensor properties and run events (``applies``): a term that describes the sensor
-(temperature law, Shupe dT/dt, gradient, lag, hysteresis, scale factor, the warm-up since
-power-on, U1(T) t since a rate step) is applied to every new run; a term tied to the
-calibration run's own clock (a step at a given time, a linear drift across that run, a
-periodic disturbance with that run's phase) is a *run event*: it is not carried to a new
-run unless asked (``run_events=True``). The warm-up term counts time from the first sample
-of the recording, taken as power-on.
+Section ``calibration`` of ``fogbayes.loop/1`` (family, terms, coefficients in deg/h on the
+scaled columns, stderr, covariance, processing, valid ranges, noise), read by ``fogbayes
+compensate --params``. bias(t) = sum_j X_j(cov(t)) c_j, the columns of
+:mod:`fogbayes.diagnose.terms` on the new recording's covariates. Bias family: output - bias;
+composite: W solving U = f(W, T, t) (:func:`fogbayes.loop.compensate.solve_rate`). Terms with
+``applies: "run"`` are carried only with ``run_events=True``; warm-up time counts from the first sample.
 """
 
 from __future__ import annotations

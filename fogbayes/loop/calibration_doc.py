@@ -1,14 +1,9 @@
 """Checks of a loop document before its calibration is applied to a recording.
 
-A loop document (``fogbayes loop --json``, schema ``fogbayes.loop/<n>``) is refused, with a
-:class:`~fogbayes.data.doc_rules.FitDocumentError` naming the document and the key path,
-when its schema is not a loop schema or is newer than this fogbayes reads, when it has no
-``calibration`` (written before loop documents carried one), or when the calibration cannot
-be applied safely: unknown term kinds, missing or non-finite term parameters, scales that
-are not positive (the columns divide by them), powers outside 0..8, channels the document
-does not name, a coefficient count that is not the terms' column count, a covariance that
-is not square of that size. Depth, JSON types and NaN/infinity are checked as for fit
-documents (:func:`fogbayes.data.doc_models._scan`).
+Refused with a :class:`~fogbayes.data.doc_rules.FitDocumentError` naming document and key path:
+a non-loop or newer schema, no ``calibration``, unknown kinds, missing or non-finite parameters,
+non-positive scales, powers outside 0..8, unknown channels, coefficient or covariance sizes
+that do not match the columns; depth, types and NaN as :func:`fogbayes.data.doc_models._scan`.
 """
 
 from __future__ import annotations

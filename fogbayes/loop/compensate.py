@@ -1,18 +1,9 @@
 """Compensated output of the final loop model, one row per input row (``--compensated``).
 
-bias-t / thermal / allan: output_comp = output - model error, in the input unit (the model
-is fitted in deg/h and converted back). composite: the estimated input rate W (deg/s) that
-solves U = f(W, T, t) for each sample, by the composite family's own inversion
-(:func:`fogbayes.composite.compensate.invert_polynomial`: Halley, clamped into the monotone
-region, with the range check). Every term of the loop is, in W, a power of W / scale (or of
-|W| / scale) times a factor of the other covariates (``Kind.rate_powers``), so per sample
-
-    U = a_0 + sum_m a_m^+- (W / W_s)^m,   +- the side of W = 0 (|W| = +-W),
-
-a polynomial with coefficients of its own; the side is the sign of the solution, which
-(the model being monotone about 0) is the sign of (U - a_0) / a_1. Where no inverse lies in
-reach (a measurement beyond the extremum of a fitted nonlinearity) the rate is NaN and the
-row is flagged ``outlier``: never a silently wrong rate.
+bias-t / thermal / allan: output - model error, in the input unit. composite: per sample
+U = a_0 + sum_m a_m^+- (W / W_s)^m solved for W by
+:func:`fogbayes.composite.compensate.invert_polynomial` (Halley, monotone region), side of
+W = 0 from sign((U - a_0) / a_1); out of reach: NaN and the row flagged ``outlier``.
 """
 
 from __future__ import annotations

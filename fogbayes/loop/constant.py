@@ -1,28 +1,10 @@
 """The calibration's constant is the IEEE Std 952 bias of the calibration run.
 
-Under a noise model with a random walk started at zero (:mod:`fogbayes.inference.noise_ssm`),
-the GLS intercept estimates the walk's *starting* level: whatever the first minutes of the
-record do sets it. IEEE Std 952 defines the bias as the time average of the output; the
-calibration constant is therefore taken as
-
-    c = mean_i (y_i - sum_{j != 0} x_ij beta_j)       over the samples the fit used,
-
-the GLS intercept plus the mean of its residual, so the compensated calibration run averages
-to zero. The other coefficients stay GLS estimates.
-
-Uncertainty. With r = y - X beta_GLS the GLS residual of the block means and u the blocks'
-sample-count weights (sum 1), c = c_GLS + u'r. The GLS residual is uncorrelated with
-beta_GLS (cov(beta, r) = s2 (X'S^-1X)^-1 X'S^-1 S (I - X A)' = 0), so
-
-    var(c) = var(c_GLS) + var(u'r),   var(u'r) = s2 u'S u - (X'u)' cov(beta) (X'u),
-
-with S the noise model's covariance of the block means (relative to s2): how much the
-time average of a repeat of this run would scatter under the fitted noise. The
-cross-covariances of c with the other coefficients are those of c_GLS.
-
-u'S u is exact and O(n) per state component: a component x_{t+1} = phi x_t + e_t,
-x_0 ~ N(0, p0), var(e) = q, contributes p0 (sum_t u_t phi^t)^2 + q sum_s G_s^2 with
-G_s = sum_{t>s} u_t phi^(t-1-s); white noise contributes sum_t u_t^2 w_t.
+c = mean_i (y_i - sum_{j != 0} x_ij beta_j) = c_GLS + u'r (u the sample-count weights, r the GLS
+residual); the other coefficients stay GLS. Since cov(beta_GLS, r) = 0,
+var(c) = var(c_GLS) + s2 u'S u - (X'u)' cov(beta) (X'u), S the noise covariance of the block
+means; u'S u is exact in O(n) per AR(1) component: p0 (sum_t u_t phi^t)^2 + q sum_s G_s^2,
+G_s = sum_{t>s} u_t phi^(t-1-s), plus sum_t u_t^2 w_t for white noise.
 """
 
 from __future__ import annotations

@@ -1,24 +1,11 @@
 """The closed loop: fit -> diagnose -> weigh the shortlisted candidates -> add -> refit.
 
-    fit the base model (GLS on block means, white + flicker + random-walk noise by ML)
-    choose its Gauss-Markov noise components (:mod:`.noise_model`: a noise model, not a step)
-    repeat at most max_steps times:
-        screen every candidate the model lacks (fixed noise, bootstrap-calibrated p)
-        refit the n_refit best with their searched value refined and the noise re-estimated
-        a candidate is supported if p_familywise < alpha, the fixed-noise screening is
-        suggestive (p_familywise < 0.1) and d elpd_loo > 0; stop if none is
-        rank the supported ones against each other (bootstrap duels, :mod:`.ranking`)
-        and add the winner, listing the indistinguishable ones as alternatives
-        (an accepted step's time is then placed inside its block and a searched scale
-        re-scored under the refit's noise, :func:`fogbayes.diagnose.refine.polish`)
-        and re-choose the noise components for the model with it; keep the term only if
-        the model with it predicts held-out folds of the record at least as well
-        (:mod:`.holdout`, time-blocked cross-validation; each fold re-chooses a step's
-        time from its training blocks, :mod:`.holdout_search`), otherwise drop that
-        candidate
-    scan the final residual for structure no candidate names (``unexplained``)
-
-See :mod:`fogbayes.diagnose.evidence` for the statistics and :data:`RULE` for the rule.
+Fit the base model (GLS, noise by ML), choose Gauss-Markov components (:mod:`.noise_model`);
+then up to ``max_steps`` times: screen candidates, refit the ``n_refit`` best, keep those with
+p_familywise < alpha, screening p < 0.1 and d elpd_loo > 0, rank them (:mod:`.ranking`), add the
+winner (polished, :func:`fogbayes.diagnose.refine.polish`) if held-out folds agree
+(:mod:`.holdout`), re-choose the noise; finally scan for ``unexplained`` structure.
+Statistics: :mod:`fogbayes.diagnose.evidence`; rule: :data:`RULE`.
 """
 
 from __future__ import annotations

@@ -1,22 +1,9 @@
 """``fogbayes fit --estimator gls``: the closed loop's fit with no step added.
 
-The loop's base fit is generalised least squares on block means under the noise model it
-chooses by maximum likelihood (white + flicker + random walk, plus Gauss-Markov components
-the evidence supports; :mod:`fogbayes.inference.noise_ssm`)::
-
-    beta = (X' S^-1 X)^-1 X' S^-1 y,     cov(beta) = s2 (X' S^-1 X)^-1
-
-with S the noise model's covariance of the block means (evaluated by a Kalman filter, never
-formed). Its standard errors hold under the flicker and random walk of a real gyro, where
-those of least squares on 1 s blocks (``--estimator ols``, the default and paper 004's
-estimator) are too small by the square root of the noise's long-memory variance inflation.
-
-This is the same code path as ``fogbayes loop --max-steps 0`` with the same orders: one
-estimator, one document (the loop document, ``fogbayes.loop/1``), which ``compensate``,
-``report``, ``batch`` and ``stream`` read like a fit document. What differs from the loop
-is only the default orders: the fit's (:data:`fogbayes.thermal.workflow.DEFAULT_ORDERS`,
-bias-t 3), since a fit has no step that could add a higher power (see
-:mod:`fogbayes.loop.bases` for why the loop starts at 2).
+beta = (X'S^-1 X)^-1 X'S^-1 y, cov(beta) = s2 (X'S^-1 X)^-1, S the covariance of the block means
+under the loop's noise model (:mod:`fogbayes.inference.noise_ssm`, by Kalman filter). Same path
+and document (``fogbayes.loop/1``) as ``fogbayes loop --max-steps 0``; only the default orders
+differ (:data:`fogbayes.thermal.workflow.DEFAULT_ORDERS`).
 """
 
 from __future__ import annotations

@@ -1,48 +1,11 @@
 """Time-blocked cross-validation: does a model predict blocks it was not fitted on?
 
-The record's block means are cut into K contiguous folds in time (K = 10). For each fold
-k the model's coefficients are re-estimated by GLS on the other folds, the noise
-hyperparameters theta and scale s2 of the model's own fit held fixed, and the fold is
-scored by its exact predictive density given every other block::
-
-    lpd_k = log p(y_k | y_(-k); beta_(-k), theta, s2)
-          = log p(y; beta_(-k)) - log p(y_(-k); beta_(-k))        (two Kalman passes)
-    lpd   = sum_k lpd_k                                            (nats)
-
-The noise model (white, flicker, random walk, Gauss-Markov) predicts what it can of the
-fold from the blocks on both sides of it; what it cannot -- a missed step, a temperature
-law bent across a ramp, a spurious term fitted to the other folds' noise -- costs
-density. Unlike the one-step-ahead PSIS-LOO of :mod:`fogbayes.diagnose.elpd`, whose state
-follows a persistent error within a few blocks, a held-out fold has no observations of
-its own to follow one with, so the score judges the deterministic model as the
-compensated output does.
-
-The loop keeps an added term only if lpd with it is not below lpd without it
-(:func:`compare`), both summed over the K' folds that can judge it. The standard error of
-the difference, se = sqrt(K' var(d_k)), d_k = lpd_k(with) - lpd_k(without), is reported
-beside it. A tolerance of one se was tried on the measured-noise study
-(``benchmarks/RESULTS_loop_real.md``): it kept a supported cubic the strict rule had lost
-by 0.5 nats, but also a false step on a clean record and a gradient in place of a lag, so
-the strict rule stays. a fold holding (nearly)
-all the information about a new coefficient -- a warm-up inside the first fold, a step at
-its edge -- leaves it unidentified by the other folds, and its prediction there says
-nothing about the term. A fold is left out when the other folds carry less than
-:data:`MIN_INFORMATION` of the full record's information about any new coefficient
-(the ratio of its GLS variances, full record / without the fold).
-
-A step's time was chosen on the whole record, the held-out fold included; scored at that
-time, a fold would be credited with a step its own blocks placed (a step put on a noise
-excursion inside it). With ``search`` (the block columns of the step's grid of times,
-:func:`searched_columns`) each fold averages its density over the grid as its training
-blocks weigh each time (:mod:`.holdout_search`).
-Measured on 8 clean simulated records, a step at the time that fits each record best was
-kept by the fixed-value score on 6 and by the searched one on 1
-(tests/test_loop_holdout_search.py). The model the term is added to is scored with its
-own terms at their fitted values, as they are held in the comparison.
-
-The filter is linear, so the innovations of y - X beta are those of y minus those of X
-times beta: one pass per fold on [y, X] gives both beta_(-k) and log p(y_(-k); beta_(-k)),
-and one pass on the full mask serves every fold.
+K = 10 contiguous folds; per fold, beta_(-k) by GLS on the others (theta, s2 fixed) and
+lpd_k = log p(y; beta_(-k)) - log p(y_(-k); beta_(-k)) (two Kalman passes), lpd = sum_k lpd_k.
+:func:`compare` keeps a term if lpd with it >= without it (se = sqrt(K' var(d_k)) reported;
+strict rule: benchmarks/RESULTS_loop_real.md). Folds where the others carry less than
+:data:`MIN_INFORMATION` of a new coefficient's information are left out; a step's time is
+re-chosen per fold (:func:`searched_columns`, :mod:`.holdout_search`).
 """
 
 from __future__ import annotations

@@ -1,32 +1,10 @@
-"""A held-out fold's predictive density when the added term has a searched parameter.
+"""A held-out fold's predictive density when the added term has a searched parameter (a step's time).
 
-The loop uses it for a step's time (:func:`fogbayes.loop.holdout.searched_columns` says
-why only there): the value the loop adds was chosen on the whole record, the held-out
-fold included. Scored at that value, a fold
-is credited with a fit to its own blocks -- a step placed on a noise excursion inside the
-fold predicts the fold well because the fold put it there. So each fold re-chooses the
-value from the candidate's grid g = 1..G on its training blocks only, and since those
-blocks may not pin it down (a step inside the held-out fold: every time in the fold fits
-the training blocks equally), the fold's density averages over the grid with the weights
-the training blocks give each value (Bayesian model averaging, a flat prior over the grid
-and a flat prior on the coefficients, noise hyperparameters and scale s2 fixed)::
-
-    w_g   ∝ p(y_(-k) | g) = ∫ p(y_(-k) | g, beta) d beta
-          ∝ exp(-RSS_g / (2 s2)) / sqrt(c_g)           (c_g: Schur complement of the new
-                                                          column in the training GLS Gram)
-    lpd_k = log sum_g w_g p(y_k | y_(-k); beta_g)       (beta_g: training GLS at g)
-
-with p(y_k | y_(-k); beta) = p(y; beta) / p(y_(-k); beta) from the innovations of two
-Kalman passes (:mod:`.holdout`). Everything is a quadratic form in beta, so all G values
-come from the Gram matrices S = V' diag(m / F) V of the columns [y, rest of the model,
-grid] on the training and on the full mask, without a loop over g: with
-K = S_bb^-1 S_bg, k = S_bb^-1 S_by (b: the rest of the model),
-
-    c_g    = S_gg - S_bg' K_g,      beta_g = (S_gy - S_bg' k) / c_g,
-    beta_b = k - K_g beta_g,        RSS_g  = S_yy - S_by' k - c_g beta_g^2.
-
-A grid value whose column the training blocks cannot identify (c_g ~ 0: a step before
-the first training block) gets no weight.
+Each fold averages over the grid g with the weights of its training blocks (flat priors):
+w_g ∝ exp(-RSS_g / (2 s2)) / sqrt(c_g), lpd_k = log sum_g w_g p(y_k | y_(-k); beta_g). From the
+Gram S = V' diag(m / F) V of [y, model, grid] with K = S_bb^-1 S_bg, k = S_bb^-1 S_by:
+c_g = S_gg - S_bg'K_g, beta_g = (S_gy - S_bg'k) / c_g, RSS_g = S_yy - S_by'k - c_g beta_g^2;
+c_g ~ 0 gets no weight.
 """
 
 from __future__ import annotations

@@ -1,14 +1,7 @@
 """Warnings when a record cannot tell the loop's drivers apart (said, never silent).
 
-On a record where the temperature moves with time in one direction only (a single cooling,
-a thermal-vacuum cold test), a bias law in T, a linear drift and a warm-up explain the same
-residual: the loop may add one of them on evidence that is really about the other. The
-correlation of the block-mean temperature with time says so before any term is added::
-
-    r = corr(T_b, t_b) over the observed blocks;   |r| >= R_WARN  ->  a warning naming T and t
-
-R_WARN = 0.99 (r^2 = 0.98: under 2 % of the temperature's variance is not a straight line
-in time). The PAN TVAC cold test reads r = -0.9993.
+r = corr(T_b, t_b) over the observed blocks; |r| >= R_WARN (0.99) warns that a T law, a drift
+and a warm-up explain the same residual.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
 """Before/after metrics of every loop step.
 
-    rms             sqrt(mean_b rbar_b^2), rbar_b the residual's mean over 10 s blocks (deg/h)
-                    (blocks restart at gaps; a short block at the end of a run is kept, so
-                    bursts shorter than 10 s still count)
-    bias_stability  paper 004 eq. 13 on 1 s windows of the compensated rate (deg/h),
-                    :func:`fogbayes.stats.stability.bias_stability`
-    elpd            PSIS-LOO elpd of the block means (:mod:`fogbayes.diagnose.elpd`)
+``rms``: sqrt(mean_b rbar_b^2) over 10 s blocks (restarting at gaps), deg/h; ``bias_stability``:
+paper 004 eq. 13 on 1 s windows (:func:`fogbayes.stats.stability.bias_stability`); ``elpd``:
+PSIS-LOO of the block means (:mod:`fogbayes.diagnose.elpd`).
 """
 
 from __future__ import annotations

@@ -1,19 +1,10 @@
 """The loop's noise model, chosen apart from the deterministic effects.
 
-White + flicker bank + random walk (what block means of a static record resolve of the
-five-term band) is always in. Free first-order Gauss-Markov components (variance v,
-time constant tau_c) are chosen by their refitted likelihood ratio::
-
-    LR = 2 [logL(M + 1 components) - logL(M components)],  p = P(chi^2_2 > LR)
-
-(chi^2_2 is the ratio's measured null, :mod:`fogbayes.diagnose.markov`). A component is
-added while p < alpha, and dropped once its own ratio no longer passes: after an effect
-is added, a component that had stood in for it has nothing left to explain. The choice
-is made before the search for effects and again after every accepted effect, so each
-deterministic candidate is judged against the best noise model of the model it joins;
-:func:`best_with_fewer` lets a candidate's refit replace a component (a step or a
-warm-up that a slow Gauss-Markov term had absorbed). Components are reported as the
-noise model, with this evidence, never as a loop step.
+White + flicker bank + random walk always; Gauss-Markov components are added while
+LR = 2 [logL(M + 1) - logL(M)] has p = P(chi^2_2 > LR) < alpha (:mod:`fogbayes.diagnose.markov`)
+and dropped when no longer passing; re-chosen after each accepted effect.
+:func:`best_with_fewer` lets a candidate's refit replace a component. Reported as the noise
+model, never as a step.
 """
 
 from __future__ import annotations

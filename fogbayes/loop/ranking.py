@@ -1,18 +1,9 @@
-"""Which of the candidates that pass the rule is added: ranking them against each other.
+"""Which of the supported candidates is added: ranking them against each other.
 
-Every refitted candidate that passes the rule on its own (family-wise p < alpha, the
-screening gate, d elpd_loo > 0) is *supported*. Supported candidates often explain the same
-residual (``temperature_gradient`` vs ``thermal_lag`` vs ``temperature_rate``, ``time_drift``
-vs ``step``): they are ranked against each other by the bootstrap-calibrated duel of
-:mod:`fogbayes.diagnose.compete`, which charges a searched parameter for the noise it can
-follow. The best-ranked supported candidate meets each other supported linear candidate
-in turn; the winner goes on. Where the duel rejects both ("neither alone"), the in-sample
-likelihood would favour the more flexible candidate, so the two refitted models are
-ranked by held-out prediction instead, a step's time averaged over its grid as the
-training folds weigh it (:mod:`.holdout`); the duel's row then says so
-(``decided_by``). Candidates the data cannot tell from the chosen one are
-listed in the step's ``evidence["alternatives"]`` with the duel's numbers and the PSIS-LOO
-difference of the two refitted models.
+Supported = passes the rule alone. The best-ranked meets each other supported linear
+candidate in the duel of :mod:`fogbayes.diagnose.compete`; where both are rejected, by
+held-out prediction (:mod:`.holdout`; ``decided_by``). Indistinguishable ones go to
+``evidence["alternatives"]``.
 """
 
 from __future__ import annotations

@@ -1,19 +1,9 @@
 """Typed results of the closed loop and their JSON form (docs/DESIGN.md contract).
 
-``LoopResult.to_json()`` returns exactly::
-
-    {"schema": "fogbayes.loop/1", "model": ..., "initial": {"rms", "bias_stability", "elpd"},
-     "steps": [{"effect", "covariates", "detail", "evidence", "rms_before", "rms_after"}],
-     "final": {"rms", "bias_stability", "elpd"}, "unexplained": [{"kind", "detail"}],
-     "noise_model": {"components": [...], "selection": [...]},
-     "input": {...}, "calibration": {...}}
-
-(rms and bias stability in deg/h, elpd in nats of the block-mean predictive density;
-``input`` and ``calibration``: the final model as a calibration another run of the sensor
-can be compensated with, :mod:`fogbayes.loop.calibration`; ``noise_model``: the final
-model's Gauss-Markov noise components and every add/drop decision with its likelihood
-ratio, :mod:`fogbayes.loop.noise_model` -- noise is modelled, never a step), plus
-``"noise_prior"`` when the loop ran under one (:mod:`fogbayes.diagnose.noise_prior`).
+``LoopResult.to_json()``: ``schema`` ``fogbayes.loop/1``, ``model``, ``initial``/``final``
+(rms, bias_stability in deg/h, elpd in nats), ``steps``, ``unexplained``, ``noise_model``
+(:mod:`fogbayes.loop.noise_model`), ``input``, ``calibration`` (:mod:`fogbayes.loop.calibration`),
+and ``noise_prior`` under one (:mod:`fogbayes.diagnose.noise_prior`).
 """
 
 from __future__ import annotations

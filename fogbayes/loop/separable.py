@@ -1,28 +1,10 @@
 """What the record's programme and noise let the loop see: effects it cannot separate.
 
-For each candidate effect the base model lacks, under the base fit's noise model (its
-hyperparameters fixed), the Kalman filter whitens the base design X and the candidate's
-column z (z~ = L^-1 z, L the Cholesky factor of the noise covariance); M projects out the
-whitened base. Then
-
-    share = 1 - ||M z~||^2 / ||z~||^2        the part of the effect the base already fits
-    se    = sqrt(s2) / ||M z~||              its coefficient's standard error (GLS)
-    d     = (z_{1-a/2} + z_{0.8}) se max|z|  the peak size (deg/h) detected with 80 % power
-
-with a = alpha / (candidates x grid points) (Bonferroni: a conservative stand-in for the
-loop's simulated calibration of the search). Two things make an effect invisible:
-
-* **confounding** -- share >= :data:`SHARE_WARN` (a variance inflation of 10) at every
-  value of its searched parameter, under the noise without the walk: the programme moves
-  the effect's driver with a base driver (a warm-up that decays during the first ramp looks
-  like the temperature law). A searched effect that degenerates into the base at one end of
-  its grid only (a lag of 60 s is the temperature itself) is not confounded;
-* **the random walk** -- a step under a walk whitens to one impulse: it is told from the
-  walk's own increments only by its size. The step's ``d`` is compared with its value
-  under the same noise without the walk; where the walk more than doubles it, it says so.
-
-The rows go into the loop document (``detectable``); a warning names the effect, the size
-that would go unseen and the remedy where that size exceeds the residual the user sees.
+Under the base noise, with M projecting out the whitened base: share = 1 - ||M z~||^2 / ||z~||^2,
+se = sqrt(s2) / ||M z~||, detectable peak d = (z_{1-a/2} + z_{0.8}) se max|z|, a = alpha /
+(candidates x grid points). Confounded: share >= :data:`SHARE_WARN` at every grid value; a step
+whose d the random walk more than doubles says so. Rows go to ``detectable``; warnings name
+the effect, the unseen size and the remedy.
 """
 
 from __future__ import annotations

@@ -1,12 +1,8 @@
 """Undeclared-effect test recordings for the closed loop (tests and benchmarks).
 
-A thin layer over the simulator's scenarios (:func:`fogbayes.simulate.scenarios.simulate`):
-the scenario's own model is what the base model declares (``thermal``/``paper004``
-scenarios with a quadratic bias in T for ``bias-t``; ``ratetable`` with a linear scale and
-a quadratic bias for ``composite``), and at most one effect is planted on top at
-``magnitude`` x its registry default. ``temperature_order`` plants a cubic coefficient on
-top of the scenario's quadratic. ``oracle_terms`` gives the true model as loop terms, so
-a test can fit the oracle the same way the loop fits its own models.
+Over :func:`fogbayes.simulate.scenarios.simulate`: the scenario's model is the declared base, at
+most one effect planted at ``magnitude`` x its registry default; ``oracle_terms`` gives the
+true model as loop terms.
 """
 
 from __future__ import annotations
