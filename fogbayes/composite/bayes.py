@@ -1,31 +1,12 @@
 """NumPyro posterior of the composite model (full matrix, scaled coefficients).
 
-    theta ~ N(0, prior_scale^2 I)           (scaled, centred coefficients, pack order)
-    y' = X theta + e,   e ~ N(0, s^2 V(eta)),   y' = (U - U_ref) / U_scale
-
-Noise models (``noise=``), eta their parameters:
-
-* ``"white"``: V = I;
-* ``"ar<p>"``: AR(p) within each cell, exact likelihood per cell (the first p values of
-  a cell ~ N(0, s^2 Gamma_p), the rest conditionally given their p predecessors); phi
-  through the stationary map :func:`fogbayes.arma.model.pacf_to_ar`, PACF ~ U(-1, 1);
-* ``"cells"``: white + AR(1)-across-cells offsets (:mod:`.noise`), with
-  log lam ~ N(-4, 3^2) (lam = offset variance / white variance; e^-4 ~ offsets of a few %
-  of the white noise, the prior spans 1e-6 ... 1e2) and rho ~ U(0, 0.99). The tridiagonal
-  algebra of that module runs in two ``lax.scan`` passes (O(K) per likelihood).
-
-sigma ~ HalfNormal(1) (scaled output units). The model is linear in theta with a Gaussian
-prior, so theta is integrated out exactly: with W the whitening of V (so that
-G = X~^T X~, h = X~^T y~, q = y~^T y~), H = G / s^2 + I / prior_scale^2, m = H^-1 h / s^2::
-
-    log p(y | s, eta) = -1/2 [ n log(2 pi s^2) + log|V| + q / s^2 - m^T h / s^2
-                               + log|H| + p log prior_scale^2 ]
-
-NUTS samples only (s, eta) from this marginal (a 1-4 dimensional, well-conditioned
-posterior; sampling theta directly fights correlations close to +-1 and scales spanning
-1e6), and theta | s, eta, y ~ N(m, H^-1) is then drawn exactly for every draw. The
-pointwise log-likelihood is stored per cell (the units for WAIC/LOO; under ``"cells"`` each
-cell's mean is taken conditionally on the other cells', as in :mod:`.compare`).
+theta ~ N(0, prior_scale^2 I), y' = X theta + e, e ~ N(0, s^2 V(eta)), sigma ~ HalfNormal(1).
+``noise``: ``"white"``; ``"ar<p>"`` (exact per-cell AR(p), phi by
+:func:`fogbayes.arma.model.pacf_to_ar`, PACF ~ U(-1, 1)); ``"cells"`` (:mod:`.noise`,
+log lam ~ N(-4, 3^2), rho ~ U(0, 0.99)). theta is integrated out: with H = G / s^2 + I / prior_scale^2,
+m = H^-1 h / s^2, log p(y | s, eta) = -1/2 [n log(2 pi s^2) + log|V| + q/s^2 - m'h/s^2 + log|H| +
+p log prior_scale^2]; NUTS samples (s, eta) and theta ~ N(m, H^-1) is drawn exactly.
+Pointwise log-likelihood per cell (as :mod:`.compare`).
 """
 
 from __future__ import annotations

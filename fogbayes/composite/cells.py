@@ -1,21 +1,9 @@
 """Rate-table recordings as (T_i, W_j) cells for the composite model (paper 000).
 
-A rate-table run holds the gyro at temperature plateaus T_i and, at each, at input rates
-W_j. :func:`rate_data` finds the cells with :func:`fogbayes.preprocess.segment_rate_table`
-(or takes a user schedule), and returns the in-cell samples with their operating time t,
-the ``t`` of U1(T) t in eq. 8. Paper 000 fits U_ij = A_ij + B_ij t per cell (eq. 10), so t
-restarts with each cell by default; the conventions are::
-
-    "cell"         t = time - (time of the last input-rate step)      (default)
-    "temperature"  t = time - (start of the current temperature plateau)
-    "run"          t = time - time[0]
-
-A constant shift of t within every cell only moves U1(T) t into U0(T) (same orders), so
-where exactly a plateau "starts" does not matter as long as it is the same for all cells.
-
-:func:`summarise_cells` reduces each cell to its least-squares line in t
-(n, t-mean, mean, slope, Sxx, RSS), from which A_ij = mean - slope * t-mean and
-B_ij = slope (eq. 10), all vectorised with ``np.bincount``.
+:func:`rate_data` finds the cells (:func:`fogbayes.preprocess.segment_rate_table` or a user
+schedule) and gives each sample its operating time t: ``"cell"`` (since the last rate step,
+default), ``"temperature"`` (since the plateau start) or ``"run"``. :func:`summarise_cells`
+reduces each cell to its line in t, A_ij = mean - slope * t-mean, B_ij = slope (eq. 10).
 """
 
 from __future__ import annotations

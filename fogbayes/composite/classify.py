@@ -1,24 +1,9 @@
-"""Paper 000's "classification fitting", step by step (section 3).
+"""Paper 000's "classification fitting" (section 3), with uncertainties.
 
-1. Per cell (T_i, W_j): U_ij = A_ij + B_ij t by least squares in t (eq. 10).
-2. U1(T_i) = mean_j B_ij; fit polynomials of order d = 1..4 in T and keep the d with the
-   smallest RMS criterion (eq. 11)::
-
-       sigma_d = sqrt( sum_k (k_k - k^_k)^2 / (n - d - 1) )
-
-   U0 gets the same order as U1 (the paper's rule).
-3. A_ij over T, one fit per rate W_j, orders 1..4: the S1 order (pooled over the rates,
-   sigma_d = sqrt(sum_j SSE_j / sum_j (n_j - d - 1)), one criterion for the whole table).
-4. A_ij over W, one fit per temperature T_i, orders 2..5 (the model already has one
-   factor W, so S2 has order d - 1), pooled the same way.
-5. With the orders fixed: M and c from the A_ij by least squares on all cells (eq. 15/16),
-   d from the U1(T_i) (eq. 12).
-
-Uncertainty (which the paper does not give): step 5's cell-level errors include the
-bias-instability offsets of whole cells, correlated between neighbouring cells, so M and c
-are fitted by GLS with white + AR(1)-across-cells errors (REML,
-:mod:`fogbayes.composite.noise`); d by OLS on the n_T values U1(T_i) with
-Student-t intervals on n_T - u1 - 1 degrees of freedom.
+Per cell U_ij = A_ij + B_ij t (eq. 10); U1(T_i) = mean_j B_ij fitted with orders 1..4 chosen by
+sigma_d = sqrt(sum (k - k^)^2 / (n - d - 1)) (eq. 11), U0 the same order; S1 and S2 orders
+from A_ij over T and over W (pooled sigma_d); M and c from A_ij (eqs. 15/16) by GLS with the
+cell-offset noise (:mod:`fogbayes.composite.noise`), d by OLS with Student-t intervals (eq. 12).
 """
 
 from __future__ import annotations

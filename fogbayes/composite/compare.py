@@ -1,19 +1,10 @@
 """Order selection for the composite model: paper 000's sigma_d, and WAIC / LOO.
 
-``criterion="sigma_d"`` is the paper's rule (eq. 11, :mod:`.classify`): the order
-with the smallest RMS fit error. It is known to over-fit (a useless extra coefficient
-lowers sigma_d about half the time); measured recovery is in benchmarks/RESULTS_composite.md.
-
-``criterion="loo"`` / ``"waic"``: each candidate is fitted by GLS with the cell-offset
-noise model (:mod:`.noise`, its (lam, rho) by REML for that candidate). Its
-posterior (flat prior, s^2 at its estimate) is the Gaussian N(theta_hat, cov); draws give
-the pointwise log-likelihood per *cell* (cells, not correlated samples, are the units left
-out), each cell's mean taken conditionally on the other cells because neighbouring cells
-share bias-instability offsets (scoring them as independent credited a spurious cubic
-U0(T) with ~20 nats on a clean simulated table). ArviZ computes elpd_loo (PSIS) or
-elpd_waic from them. Orders are searched one coordinate at a time (s1, s2, u0, u1,
-repeated until nothing changes); along a coordinate the *smallest* order whose elpd is
-within ``threshold`` nats of the best is kept: an extra term must earn its place.
+``"sigma_d"``: eq. 11 (:mod:`.classify`; over-fits, benchmarks/RESULTS_composite.md).
+``"loo"`` / ``"waic"``: GLS with the cell-offset noise (:mod:`.noise`), draws from
+N(theta_hat, cov), pointwise log-likelihood per cell conditional on the other cells, ArviZ
+elpd; coordinate search over (s1, s2, u0, u1) keeping the smallest order within
+``threshold`` nats of the best.
 """
 
 from __future__ import annotations

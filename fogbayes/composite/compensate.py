@@ -1,25 +1,9 @@
 """Compensation with the composite model: solve U(W) = U_measured for the input rate W.
 
-For each sample, with S_j(T) = sum_i M_ij T^i and the bias B(T, t) = U0(T) + U1(T) t,
-
-    g(W) = W * P(W) - y = 0,   P(W) = sum_j S_j(T) W^j,   y = U - B(T, t)
-
-is solved in scaled units (T', W', y' of :mod:`fogbayes.composite.model`), which keeps
-float32 usable. Methods (all start from the linear guess w0 = y / S_0(T), as the paper):
-
-* ``"halley"`` (default): w <- w - 2 g g' / (2 g'^2 - g g''), cubic convergence;
-* ``"newton"``: w <- w - g / g';
-* ``"paper"``: paper 000's fixed point w <- y / P(w), 2 iterations in the paper. It is
-  linearly convergent with rate |w P'/P| (about 0.26 at 80 deg/s), so 2 steps leave about
-  1 % at +-80 deg/s (docs/REFERENCE.md) - kept as the paper's baseline.
-
-The iteration count is fixed and small (a static argument, unrolled so that XLA fuses the
-whole per-sample computation into one elementwise loop); :func:`choose_iterations` picks
-it once per model by running the same algorithm in NumPy over the calibrated box. Newton
-and Halley iterates are clamped into the monotone region around W = 0 (the model folds
-back beyond about +-128 deg/s for the paper's coefficients, where the inversion is
-ambiguous); a sample whose solution lies outside it ends on the clamp, or unsolved: its
-rate is NaN and ``in_range`` False (no valid inverse exists; the row is kept and flagged).
+g(W) = W P(W) - y = 0, P(W) = sum_j S_j(T) W^j, y = U - U0(T) - U1(T) t, in scaled units, from
+w0 = y / S_0(T): ``"halley"`` (default), ``"newton"``, or ``"paper"`` (paper 000's fixed point
+w <- y / P(w)). A fixed iteration count (:func:`choose_iterations`); iterates clamped to the
+monotone region around W = 0; no inverse gives NaN and ``in_range`` False.
 """
 
 from __future__ import annotations

@@ -1,20 +1,9 @@
 """The composite compensator (:mod:`fogbayes.composite.compensate`) as a compiled CPU loop.
 
-Per sample, the same algorithm as the XLA program ``_rate`` (scaled units)::
-
-    T' = (T - T_ref) / T_scale,  t' = t / t_scale
-    y  = (U - U_ref) / U_scale - c(T') - t' d(T')          (Horner in T')
-    S_j = M_j(T'),  P(w) = sum_j S_j w^j                    (Horner in w)
-    w0 = y r(T')  (r ~ 1 / S_0; y / S_0 for the paper's scheme), clipped to the box
-    w <- Halley / Newton / fixed-point steps, each clipped (a fixed count)
-    rate = w W_scale if w is strictly inside the box and |w P(w) - y| is small, else NaN
-
-The source is generated per *structure* (polynomial degrees, method, iteration count) and
-reads every coefficient from one float64 vector ``q`` into local scalars before the loop, so
-the per-sample code is straight-line and the compiler vectorises the loop over samples
-(split over the cores); it reads U, T, t once and writes the rate once, into ``out``.
-One compilation serves every fit of that structure in the process (a fleet of sensors, a
-loop's candidates): coefficients are arguments, never constants of the program.
+Per sample, the XLA program ``_rate``'s algorithm: scaled T', t', y = U' - c(T') - t' d(T'),
+P(w) = sum_j M_j(T') w^j, clipped Halley/Newton/fixed-point steps; rate = w W_scale inside the
+box with small |w P(w) - y|, else NaN. Source generated per structure (degrees, method,
+iterations); coefficients are arguments, so one compilation serves every fit of that structure.
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
-"""What a composite fit document must hold to be applied (the family's own rules).
+"""What a composite fit document must hold to be applied (the family's ``check_document``).
 
-:func:`fogbayes.data.documents.validate_fit_document` checks every document's envelope
-(schema, JSON types and finite numbers, depth, ``input``) and then calls the family's
-``check_document`` (:data:`fogbayes.data.documents.MODEL_CHECKS`): orders and the
-parameter count they imply, scaling, raw matrices, calibrated ranges, compensation
-settings, posterior draws, and that the model can be inverted over its temperatures.
+Called by :func:`fogbayes.data.documents.validate_fit_document` via
+:data:`fogbayes.data.documents.MODEL_CHECKS`: orders and parameter count, scaling, raw
+matrices, ranges, compensation settings, draws, invertibility over the temperatures.
 """
 
 from __future__ import annotations

@@ -1,21 +1,9 @@
 """Joint least-squares fits of the composite model (paper 000) on all samples.
 
-Full matrix (linear in the parameters), in the scaled units of
-:mod:`fogbayes.composite.model`::
-
-    y' = (U - U_ref) / U_scale = X(T, W, t) theta + e,   theta = pack(M', c', d')
-
-solved in closed form (``np.linalg.lstsq``, float64) with covariance s^2 (X^T X)^-1.
-With ``noise="ar<p>"`` the noise is an AR(p) process within each cell and the fit is
-feasible GLS: estimate phi by Yule-Walker on the residuals (autocovariances pooled over
-cells, never across a cell boundary), prewhiten y and X inside each cell
-(e_t = r_t - sum phi_i r_{t-i}), refit, repeat. The covariance is then s_e^2 (X~^T X~)^-1,
-which stays honest when the noise is coloured (white-noise errors would be too narrow).
-
-Rank-1 product form (bilinear: M' = a' [1, b']^T) is fitted with optax L-BFGS inside one
-``lax.scan``, started from the best rank-1 approximation of the closed-form full fit;
-its covariance is the Gauss-Newton s^2 (J^T J)^-1 at the optimum. The same optax path
-applied to the full (linear) form reproduces the closed form (tested).
+Full matrix: y' = X(T, W, t) theta + e by ``lstsq``, cov = s^2 (X'X)^-1; ``noise="ar<p>"``:
+feasible GLS, phi by Yule-Walker pooled within cells, prewhitening inside each cell, iterated.
+Rank-1 product M' = a [1, b]^T: optax L-BFGS in one ``lax.scan`` from the best rank-1
+approximation, cov = s^2 (J'J)^-1 (Gauss-Newton).
 """
 
 from __future__ import annotations

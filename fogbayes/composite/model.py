@@ -1,37 +1,10 @@
 """Paper 000's composite static temperature model of a FOG, as pure JAX functions.
 
-Model (paper 000, eq. 8/14), output U (V for the VG951, or any raw unit)::
-
-    U = S1(T) S2(W) W + U0(T) + U1(T) t + xi
-      = sum_{i<=s1, j<=s2} M_ij T^i W^(j+1) + sum_{i<=u0} c_i T^i + t sum_{i<=u1} d_i T^i
-
-with T the temperature (deg C), W the input rate (deg/s) and t the operating time (s).
-Two parameterisations of the scale-factor part:
-
-* full matrix (:class:`FullParams`): every M_ij free, so U is *linear* in the parameters
-  (what paper 000 identifies "as a whole", eq. 15);
-* rank-1 product (:class:`ProductParams`): M = a b^T, i.e. S1(T) = sum a_i T^i and
-  S2(W) = sum b_j W^j with b_0 = 1 fixed (S1 is then the small-rate scale factor), which
-  is *bilinear* in (a, b).
-
-Internally every quantity is centred and scaled so that the normal equations are well
-conditioned and single precision is usable (the raw coefficients span 1e1 ... 1e-12)::
-
-    T' = (T - T_ref) / T_scale     W' = W / W_scale     t' = t / t_scale
-    U  = U_ref + U_scale * [ sum M'_ij T'^i W'^(j+1) + sum c'_i T'^i + t' sum d'_i T'^i ]
-
-W is only scaled, never shifted, because W = 0 is structural (no scale-factor output at
-zero rate). The paper's raw coefficients (:class:`RawCoefficients`, eq. 15/16/12 layout)
-are produced by an exact linear map (:func:`to_raw`), so posterior draws and covariances
-map across too. ``PAPER_000`` holds the printed values.
-
-Example:
-    >>> import numpy as np
-    >>> sc = Scaling(20.0, 45.0, 80.0, 60.0, 4.0, 3000.0)
-    >>> p = from_raw(PAPER_000, sc)
-    >>> u = predict(p, sc, 20.0, 80.0, 0.0)
-    >>> bool(np.isclose(u, raw_predict(PAPER_000, 20.0, 80.0, 0.0)))
-    True
+U = S1(T) S2(W) W + U0(T) + U1(T) t = sum M_ij T^i W^(j+1) + sum c_i T^i + t sum d_i T^i
+(eq. 8/14; T deg C, W deg/s, t s). :class:`FullParams` (linear) or :class:`ProductParams`
+(M = a b^T, b_0 = 1). Centred and scaled: T' = (T - T_ref) / T_scale, W' = W / W_scale,
+t' = t / t_scale, U = U_ref + U_scale [...]; :func:`to_raw` maps exactly to
+:class:`RawCoefficients` (eqs. 15/16/12); ``PAPER_000`` holds the printed values.
 """
 
 from __future__ import annotations

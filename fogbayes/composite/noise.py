@@ -1,34 +1,10 @@
 """Cell-offset noise for rate-table fits: white noise plus a slow offset per cell.
 
-A FOG's bias instability (flicker) barely moves the noise inside one rate-table cell but
-shifts whole cells, and neighbouring cells together: with white-noise errors, terms built
-from pairs of adjacent cells (U(+W) + U(-W) gives the even powers of W) come out with
-intervals that are too narrow (measured: 84 % coverage of nominal 90 % intervals on
-paper 000's simulated table with bias instability B = 0.2 deg/h). The noise model::
-
-    y = X theta + Z eta + e,   e ~ N(0, s^2 I),   eta ~ N(0, s^2 lam R),
-    R_kl = rho ** (|tau_k - tau_l| / dtau)    (AR(1) across cells in time order)
-
-with Z the sample-to-cell indicator, tau_k the cell mid-times and dtau their median
-spacing. Splitting every cell into its mean and the within-cell contrasts (which the
-offsets do not touch) gives, with X-bar, y-bar the cell means and N = diag(n_k)::
-
-    Sigma = N^-1 + lam R                      (covariance / s^2 of the cell means)
-    G = W_XX + Xb^T Sigma^-1 Xb,   h = W_Xy + Xb^T Sigma^-1 yb,   q = W_yy + yb^T Sigma^-1 yb
-    theta = G^-1 h,   RSS = q - h^T theta,   s^2 = RSS / (n - p),   cov = s^2 G^-1
-    log|V / s^2| = sum_k log n_k + log|Sigma|
-
-where W_.. are the within-cell scatter sums (computed from centred data: no cancellation,
-so the white-noise limit lam -> 0 and the pure-offset limit lam -> inf are both stable).
-R^-1 = Q is tridiagonal for an AR(1) at the cell times, so with B = Q + lam N (banded)::
-
-    Sigma^-1 v = N v - lam N B^-1 N v             (lam n small: white-noise side)
-               = (Q v - Q B^-1 Q v) / lam         (lam n large: offset side)
-    log|Sigma| = log|R| + log|B| - sum log n_k
-
-each form used where it does not cancel; a likelihood costs O(K p^2) whatever the
-number of samples. (lam, rho) are
-estimated by REML (s^2 profiled out); lam -> 0 gives back ordinary least squares.
+y = X theta + Z eta + e, e ~ N(0, s^2 I), eta ~ N(0, s^2 lam R), R_kl = rho^(|tau_k - tau_l| / dtau).
+With cell means and Sigma = N^-1 + lam R: G = W_XX + Xb'Sigma^-1 Xb, h = W_Xy + Xb'Sigma^-1 yb,
+theta = G^-1 h, s^2 = (q - h'theta) / (n - p), cov = s^2 G^-1. R^-1 = Q is tridiagonal, so
+Sigma^-1 v and log|Sigma| = log|R| + log|Q + lam N| - sum log n_k cost O(K p^2); (lam, rho) by
+REML; lam -> 0 is OLS.
 """
 
 from __future__ import annotations

@@ -1,18 +1,7 @@
 """Paper-000-style before/after tables: relative error per temperature and rate.
 
-For each (T_i, W_j) cell the mean of each compensated rate over the cell's samples is
-compared with the set-point rate: relative error = |mean - W_j| / |W_j| x 100 %, as in the
-paper's Tables 1-2 ("result before/after compensation", "relative error /%").
-
-"Before" is the uncompensated gyro read with one linear calibration taken at a nominal
-temperature T_nom (20 deg C, the paper's Table 1 temperature)::
-
-    W_before = (U - U0(T_nom)) / S0(T_nom),   S0(T) = sum_i M_i0 T^i
-
-i.e. what a user of the gyro's room-temperature scale factor and bias sees. (Dividing by
-the temperature-dependent S0(T) instead, the paper's step-1 initial guess, gives 13.1 %
-at +-80 deg/s and -30 deg C against the paper's 10.6-10.9 %; the nominal calibration
-gives 11.6 %, and the paper's upward trend with temperature.)
+Per (T_i, W_j) cell: |mean - W_j| / |W_j| x 100 % (paper Tables 1-2). "Before" is a nominal
+linear calibration at T_nom = 20 deg C: W_before = (U - U0(T_nom)) / S0(T_nom), S0(T) = sum_i M_i0 T^i.
 """
 
 from __future__ import annotations

@@ -1,23 +1,10 @@
 """Workflow for the ``composite`` model (paper 000): fit a rate-table run, compensate.
 
-``fit_recording``:
-
-1. split the run into (T_i, W_j) cells (:func:`fogbayes.composite.cells.rate_data`);
-2. paper 000's classification fitting with its sigma_d order table (always reported);
-3. orders: given (``"s1,s2,u0,u1"``; three values set u1 = u0 as the paper), or selected
-   (``None``/``"auto"``) by PSIS-LOO over cells (``order_criterion="loo"``, or ``"waic"``
-   or the paper's ``"sigma_d"``);
-4. the fit (``method``): ``"joint"`` (default: least squares on all samples, GLS with the
-   cell-offset noise model), ``"classification"`` (the paper's two-stage estimate) or
-   ``"product"`` (rank-1 S1(T) S2(W), optax);
-5. ``bayes=True``: NUTS posterior (``noise`` "cells" | "white" | "ar<p>"), intervals of
-   the raw coefficients from the draws, WAIC/LOO, convergence;
-6. compensator: monotone box, iteration count (Halley, checked over the calibrated
-   range), and the paper-style before/after table on the fitted run itself.
-
-The fit document is JSON-able and holds everything :func:`compensate_recording` needs.
-``compensate_recording`` returns ``time``, ``rate`` (deg/s) and ``outlier`` (True where
-the output lies outside the invertible, monotone region of the model), one row per row.
+``fit_recording``: cells (:func:`fogbayes.composite.cells.rate_data`), the paper's sigma_d
+table, orders given (``"s1,s2,u0,u1"``) or selected (``"loo"``, ``"waic"``, ``"sigma_d"``),
+``method`` ``"joint"`` / ``"classification"`` / ``"product"``, optional NUTS (``bayes=True``),
+and the compensator with a before/after table. :func:`compensate_recording` returns ``time``,
+``rate`` (deg/s) and ``outlier`` (outside the invertible region), one row per row.
 """
 
 from __future__ import annotations
