@@ -1,18 +1,8 @@
 """Fleets: fit, compensate, loop or report many recordings, in-process or on Dask.
 
-* :func:`run_batch` -- every recording of a folder through one task; ``OUT/summary.json``
-  (:mod:`.fleet`);
-* :func:`run_one` -- one recording -> its output files and summary row (:mod:`.jobs`);
-* :func:`run_tasks` -- the engines: ``"local"`` (serial, in-process) and ``"dask"`` (a
-  ``LocalCluster`` we start, or an existing scheduler by ``address``) (:mod:`.engine`;
-  why Dask rather than Ray is written there);
-* :func:`fit_vectorized` -- ``bias-t``/``thermal`` fits of same-shape recordings with one
-  ``jit(vmap)`` least-squares call (:mod:`.vectorized`; what is and is not vectorised).
-
-Example:
-    >>> from fogbayes.batch import run_batch                      # doctest: +SKIP
-    >>> s = run_batch("runs/", model="bias-t", out="fits/", engine="dask", workers=2)
-    >>> [(r["file"], r["status"]) for r in s["rows"]]
+:func:`run_batch` (:mod:`.fleet`, ``OUT/summary.json``), :func:`run_one` (:mod:`.jobs`),
+:func:`run_tasks` (:mod:`.engine`: ``"local"`` or ``"dask"``), :func:`fit_vectorized`
+(:mod:`.vectorized`: same-shape ``bias-t``/``thermal`` fits in one batched solve).
 """
 
 from .engine import ENGINES, dask_client, run_tasks

@@ -1,13 +1,8 @@
 """Compiled per-sensor loops over blocks of samples (Numba, CPU; sensors on all cores).
 
-* :func:`masked_block_means` -- block means of rate and covariates without the flagged
-  samples (:func:`fogbayes.preprocess.blocks.group_mean`'s definition, one shared clock);
-* :func:`stability` -- bias ``B0`` and bias stability ``Bs`` of every row before and after
-  compensation (paper 004 eqs. 12-13) over shared block windows.
-
-Written as :mod:`.kernels` is: a ``nogil`` range loop per kernel, run on contiguous ranges
-of sensors by :func:`fogbayes.support.numba_cache.over_rows`; sums in sample order; the machine code is
-cached in the user's cache folder (:mod:`fogbayes.support.numba_cache`).
+:func:`masked_block_means` (:func:`fogbayes.preprocess.blocks.group_mean`'s definition, one
+shared clock) and :func:`stability` (B0 and Bs before/after, paper 004 eqs. 12-13), run as
+:mod:`.kernels` by :func:`fogbayes.support.numba_cache.over_rows`.
 """
 
 from __future__ import annotations

@@ -1,29 +1,9 @@
 """Where the recordings of a fleet run: in this process, or on a Dask cluster.
 
-``run_tasks(fn, items, engine=, address=, workers=, on_done=)`` calls ``fn(item)`` for
-every item and returns the results **in input order**, whichever finished first:
-
-* ``"local"`` -- one after another in this process (no extra processes; the reference);
-* ``"dask"``  -- ``address=None``: a :class:`distributed.LocalCluster` of ``workers``
-  worker processes, one thread each (a fit is CPU-bound Python + XLA: threads would fight
-  over the GIL), started here and closed when the run ends; ``address="tcp://host:8786"``:
-  the same code submitted to an existing scheduler (``dask scheduler`` + ``dask worker``
-  on the machines of a cluster), which is left running.
-
-Why Dask and not Ray: both run Python functions on remote processes and return futures.
-Dask's wheels are pure Python (Ray's wheel is about ten times larger, with a C++ core and
-its own object store daemon); ``LocalCluster`` starts in-process in a few seconds, with no
-daemon to install or leave behind; the same ``Client`` code is pointed at a remote
-scheduler by its address; and each future carries its own exception, so a failure stays
-with its recording. Nothing of fogbayes depends on Dask outside this module, and Dask is an
-extra (``pip install 'fogbayes[dask]'``): without it, ``engine="dask"`` stops before any work
-with one line naming the extra (:func:`check_engine`, :mod:`fogbayes.support.extras`).
-
-Every worker imports :mod:`fogbayes` before it runs anything (a worker plugin), which turns
-on JAX float64 there too: the numbers a worker computes are those this process computes
-(the batch tests check equality with the in-process engine). For a remote cluster the
-workers need fogbayes installed and must read the recordings and write OUT at the same
-paths (a shared file system), because jobs pass paths, not data.
+``run_tasks(fn, items, engine=, address=, workers=, on_done=)`` returns ``fn(item)`` for every
+item in input order: ``"local"`` (serial) or ``"dask"`` (a ``LocalCluster`` of one-thread
+workers, or an existing scheduler at ``address``; the extra ``fogbayes[dask]``, checked by
+:func:`check_engine`). Workers import :mod:`fogbayes` first (float64) and need the same paths.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
 """Which recordings a fleet run takes, and the error for an unusable fleet.
 
-``find_recordings(DIR, pattern)`` lists the files of ``DIR`` (not its subfolders) that
-match one of the comma-separated glob patterns, sorted by name, so that every engine sees
-the recordings (and writes the summary rows) in the same order. Outputs a previous run
-wrote into ``DIR`` itself (``*.compensated.csv``) are skipped: they are not recordings; so
-are the hidden temporary files of an unfinished write (``.<stem>.tmp-*``, left only by a
-SIGKILL, see :mod:`fogbayes.data.atomic`).
+``find_recordings(DIR, pattern)``: files of ``DIR`` (not subfolders) matching the comma-separated
+globs, sorted by name; ``*.compensated.csv`` and ``.<stem>.tmp-*`` (:mod:`fogbayes.data.atomic`)
+are skipped.
 """
 
 from __future__ import annotations

@@ -1,34 +1,11 @@
 """A fleet run: every recording of a folder through one task, then ``OUT/summary.json``.
 
-``run_batch(DIR, model=, out=, task=, engine=, ...)`` finds the recordings
-(:func:`.files.find_recordings`), runs :func:`.jobs.run_one` on each through the engine
-(:func:`.engine.run_tasks`: in-process, or a Dask cluster), or -- ``vectorize=True``, for
-``bias-t``/``thermal`` recordings of one length and sampling -- fits them all with one
-batched solve (:func:`.vectorized.fit_vectorized`), and writes the summary::
-
-    {"fogbayes_version", "task", "model", "engine", "address", "workers", "vectorized",
-     "folder", "pattern", "options", "n_files", "n_ok", "n_error", "seconds",
-     "rows": [{"file", "status", "outputs" | "error", <key numbers>, "seconds"}, ...]}
-
-one row per recording, in file-name order whatever the engine. A recording that fails is an
-``error`` row; the run goes on. Input that makes the whole run impossible (no folder, no
-recordings, unknown task/model/engine, an unreachable scheduler) raises
-:class:`.files.FleetError` before any work.
-
-Re-running into the same OUT never leaves a mix of two runs beside a summary:
-
-* every file is written atomically (:mod:`fogbayes.data.atomic`): the old one or the new
-  one, never a part (with ``engine="dask"``, a worker process killed hard by its nanny can
-  leave a hidden ``.<stem>.tmp-*`` file, never a partial file under a final name);
-* the earlier ``summary.json`` is removed when the work starts, and the new one is written
-  last, once every recording is done: ``OUT/summary.json`` exists only for a run that
-  finished (a killed run leaves none);
-* each recording's outputs from an earlier run that this run did not write are removed
-  (``<stem>.fit.json``, ``.compensated.csv``, ``.loop.json``, ``.html``): a recording that
-  fails now keeps no old fit beside the new results -- its row in the summary holds the
-  error instead -- and outputs of another task (a ``.compensated.csv`` made with an older
-  fit) go too. The row lists what was removed under ``removed_stale``. Files of recordings
-  that are not part of this run, and any other file in OUT, are left alone.
+``run_batch`` runs :func:`.jobs.run_one` on each file of :func:`.files.find_recordings` through
+:func:`.engine.run_tasks` (or :func:`.vectorized.fit_vectorized`) and writes the summary, one
+row per file in name order; a failing file is an ``error`` row, a run that cannot start raises
+:class:`.files.FleetError`. Files are written atomically (:mod:`fogbayes.data.atomic`), the old
+summary is removed first and the new one written last, and stale outputs of this run's
+recordings are removed (``removed_stale``).
 """
 
 from __future__ import annotations

@@ -1,29 +1,10 @@
 """One recording of a fleet -> its output files and one summary row.
 
-``run_one(path, model=, task=, out_dir=, options=)`` loads the recording and runs one task
-with the same library calls as the single-recording commands, so a fleet's outputs are the
-files those commands would write:
-
-* ``fit``        -- ``workflow_for(model).fit_recording`` -> ``OUT/<stem>.fit.json``
-                    (the document ``fogbayes fit --json`` writes, byte for byte);
-* ``compensate`` -- the fit, then ``compensate_recording`` -> also ``<stem>.compensated.csv``
-                    (every input row: time, compensated output, outlier flag); with
-                    ``params`` (a fit or loop document, ``fogbayes batch --params``) no fit:
-                    that one calibration is applied to every recording, as ``fogbayes
-                    compensate REC --params DOC`` applies it (loop documents: the sensor's
-                    terms, run events left out), and the row holds the 10 s RMS and 1 s
-                    bias stability before/after;
-* ``loop``       -- :func:`fogbayes.loop.run_loop` -> ``<stem>.loop.json`` (docs/DESIGN.md
-                    contract) and ``<stem>.compensated.csv``, as ``fogbayes loop`` writes them;
-* ``report``     -- :func:`fogbayes.workflow.report.build_report` -> ``<stem>.html``.
-
-The row holds the file, ``status`` ("ok" | "error"), the outputs (names inside OUT), the
-key numbers of the task (convergence, 1 s bias stability before/after, loop RMS before/
-after) and the seconds it took. Any exception is caught and becomes
-``{"file", "status": "error", "error": message}`` -- a :class:`FogbayesError` keeps its
-message (file, column, row, fix), anything else reads ``"TypeName: message"`` -- so one bad
-file never stops a fleet. ``run_one`` is a module-level function of picklable arguments:
-Dask ships it to worker processes as it is.
+``run_one(path, model=, task=, out_dir=, options=)`` runs ``fit`` (``<stem>.fit.json``),
+``compensate`` (also ``<stem>.compensated.csv``; with ``params`` one calibration for all),
+``loop`` (:func:`fogbayes.loop.run_loop`, ``<stem>.loop.json``) or ``report``
+(:func:`fogbayes.workflow.report.build_report`, ``<stem>.html``) with the single-recording
+calls. Any exception becomes ``{"file", "status": "error", "error"}``; picklable for Dask.
 """
 
 from __future__ import annotations

@@ -1,43 +1,11 @@
-r"""Compiled per-sensor loops of the vectorised fit (Numba, CPU; sensors on all cores).
+"""Compiled per-sensor loops of the vectorised fit (Numba, CPU; sensors on all cores).
 
-Each kernel does for every sensor ``s`` what the per-recording workflow does with NumPy,
-in one pass over that sensor's samples, never building the (sensors, samples, terms)
-design array that a batched XLA program has to stream through memory:
-
-* :func:`fit_gram` -- weighted least squares by the normal equations in the sensor's own
-  scaled basis (:func:`fogbayes.inference.lsq.lstsq_gram`'s equations)::
-
-      z'_i = (z_i - centre_s) / scale_s,     x_ik = prod_c z'_ic ** e_kc
-      G = sum_i w_i x_i x_i^T,   g = sum_i w_i y_i x_i,   G = L L^T (Cholesky)
-      b = G^{-1} g,   s^2 = sum_i w_i (y_i - x_i b)^2 / (m_s - p),   Cov = s^2 G^{-1}
-
-  a fit is ``ok`` when ``min diag L > rcond * max diag L`` (the QR path's rank test on
-  ``R``, since ``diag L = |diag R|``) and ``m_s > p``;
-* :func:`evaluate` -- the modelled bias ``x(z_i) . b`` at every sample (covariates clamped
-  to the fit's range, as compensation clamps them);
-* :func:`covariate_range` -- each sensor's covariate range over its blocks of weight > 0;
-* :func:`pauta` -- :func:`fogbayes.preprocess.pauta_flags` on each row: passes of
-  ``|r_i - mean| > n_sigma * std_{n-1}`` over the samples not yet flagged, until a pass
-  flags nothing new (:func:`residual_pauta`: on the fit's residuals, formed on the fly);
-
-Block means without the flagged samples and bias stability are in :mod:`.block_kernels`.
-
-Sums run in sample order (NumPy sums pairwise), so results agree with the NumPy path to
-rounding, ~1e-15 relative (tests/test_batch_kernels.py). Covariates are stored
-covariate-major, z (S, c, n): each covariate of a sensor is one contiguous row, as the
-per-sensor min/max and the block means read them. ``cache=True``: the machine code is
-stored in the user's cache folder (:mod:`fogbayes.support.numba_cache`), so only a first process pays
-the compilation.
-
-Sensors run on all cores as contiguous ranges, one per thread
-(:func:`fogbayes.support.numba_cache.over_rows`: Python threads calling a ``nogil`` loop
-``_*_range(s0, s1, ...)``), not as Numba ``prange`` loops: the same arithmetic and speed,
-but Numba's parallel passes made the first compilation
-~3x longer (all six kernels with an empty cache: 29 s as ``prange`` loops, 10 s as range
-loops; ``fit_gram`` 14 s -> 6 s; measured on the 2-core box). The thread count is Numba's
-(``NUMBA_NUM_THREADS``). ``error_model="numpy"``: a division by zero (a rank-deficient
-sensor's Cholesky) gives inf/NaN and ``ok`` False, as it did inside ``prange``, instead of
-raising.
+:func:`fit_gram`: in the sensor's scaled basis, G = sum w x x', g = sum w y x, G = LL',
+b = G^-1 g, s^2 = sum w (y - x b)^2 / (m_s - p), Cov = s^2 G^-1; ``ok`` when
+min diag L > rcond max diag L and m_s > p (:func:`fogbayes.inference.lsq.lstsq_gram`).
+:func:`evaluate` (clamped bias), :func:`covariate_range`, :func:`pauta`
+(:func:`fogbayes.preprocess.pauta_flags`) and :func:`residual_pauta`. Sums in sample order;
+covariates stored (S, c, n); range loops over :func:`fogbayes.support.numba_cache.over_rows`.
 """
 
 from __future__ import annotations

@@ -1,20 +1,10 @@
 """Bias and bias stability (paper 004 eqs. 12-13) of many sensors at once.
 
-:func:`segment_reports` returns, for every sensor, exactly the document of
-:func:`fogbayes.stats.stability.segment_report`::
-
-    B0 = mean(F),   Bs(W) = std_{n-1}( means of F over the complete W-second blocks )
-
-on the whole record and on each soak/ramp segment, before and after compensation.
-
-What makes it fast is that a lab samples its gyros with one clock and soaks them in one
-chamber: many sensors share a time vector and the same segment bounds. The block layout of
-a (time vector, segment, window) is built once (:func:`fogbayes.preprocess.blocks.block_index`,
-the same function the single-sensor path uses) and one compiled loop over the sensors that
-share it (:func:`.block_kernels.stability`, sensors on all cores) gives B0 and every window's Bs.
-Sensors with a clock or segments of their own still work; they share less. Numbers equal the
-single-sensor path to rounding (sums in sample order rather than NumPy's pairwise order:
-~1e-15 relative).
+:func:`segment_reports` returns per sensor the document of
+:func:`fogbayes.stats.stability.segment_report` (B0 = mean(F), Bs(W) = std_{n-1} of W-second
+block means; whole record and each segment, before/after), one block layout
+(:func:`fogbayes.preprocess.blocks.block_index`) and one :func:`.block_kernels.stability`
+call per shared clock.
 """
 
 from __future__ import annotations

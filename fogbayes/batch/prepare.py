@@ -1,22 +1,10 @@
 """Per-sample covariates, fit blocks and thermal segments of many sensors at once.
 
-The single-recording workflow (:mod:`fogbayes.thermal.data`) computes, per
-recording, the covariates z (T, dT/dt by a Savitzky-Golay slope, ...), the block means the
-fit uses, and the soak/ramp segments of the metrics. Sensors of one rig share a clock, so
-for each group of recordings with identical time stamps this module does each step once for
-the whole group:
-
-* dT/dt: one 2-D filter call (:func:`fogbayes.preprocess.temperature_rate` accepts
-  (sensors, n) temperatures);
-* block means (``average_s`` blocks, with or without Pauta-flagged samples left out): the
-  block layout is built once (:func:`fogbayes.preprocess.blocks.block_index`) and one
-  compiled loop (:func:`.block_kernels.masked_block_means`) averages every sensor's rate and
-  covariates over it;
-* segments: :func:`fogbayes.preprocess.segments.segment_thermal_rows` (one filter call).
-
-The results equal the per-recording functions' to rounding (sums in another order). Paper
-mode (1 s / 10 s smoothing with held differences) and recordings alone on their clock go
-through the per-recording functions.
+Per group of recordings with identical time stamps, the steps of :mod:`fogbayes.thermal.data`
+once: dT/dt (:func:`fogbayes.preprocess.temperature_rate` on (sensors, n)), block means
+(:func:`fogbayes.preprocess.blocks.block_index`, :func:`.block_kernels.masked_block_means`),
+segments (:func:`fogbayes.preprocess.segments.segment_thermal_rows`). Paper mode and lone
+clocks use the per-recording functions.
 """
 
 from __future__ import annotations

@@ -1,33 +1,11 @@
 """``bias-t`` / ``thermal`` fits of many same-shape recordings in one batched pass.
 
-The per-recording workflow (:func:`fogbayes.thermal.workflow.fit_recording`) is
-
-1. covariates per sample and 1 s block means (data-dependent gaps and masks),
-2. order choice (only when several orders are asked for),
-3. closed-form weighted least squares in the scaled basis,
-4. 3-sigma (Pauta) flags on the per-sample residuals, iterated until none is new,
-5. refit on the block means without the flagged samples, metrics per soak/ramp segment.
-
-Here every step runs once for all sensors. Steps 1 and 5's block means, segments and
-metrics run once per *clock group* (recordings with identical time stamps, as a rig's
-sensors have) on stacked (sensors, samples) arrays (:mod:`.prepare`, :mod:`.metrics`: one
-2-D Savitzky-Golay call, block layouts built once). Steps 3-4 are one call each over all
-sensors: on a CPU the compiled loops of :mod:`.kernels` (``solver="numba"``, sensors on all
-cores, the design never stored), on a GPU/TPU the ``jit(vmap)`` programs of :mod:`.xla`
-(``"gram"``; ``"qr"``: the workflow's own QR). Per sensor ``s``::
-
-    z'_s = (z_s - centre_s) / scale_s                (the sensor's own scaled basis)
-    b_s  = argmin_b sum_i w_si (y_si - X(z'_si) b)^2  (w = samples per block)
-
-Blocks are stacked with their counts as weights; an empty block (all its samples flagged)
-or padding weighs 0 and changes no sum, so the stacked fit equals the one without it. The
-residual variance uses each sensor's own ``m_s - p`` degrees of freedom, as the workflow
-does. Order choice is not vectorised: ``orders`` must name one order. The documents equal
-the per-recording workflow's to ~1e-9 relative (tests/test_batch.py; measured 1e-14).
-
-Speed (benchmarks/RESULTS_batch.md, 1 000 sensors x 3 600 samples, 2-core CPU, idle):
-25.1-25.6x a loop of the per-recording workflow with the compiled loops (12.7-14.1x with the
-XLA program), same coefficients to 8e-15.
+The steps of :func:`fogbayes.thermal.workflow.fit_recording` (covariates and block means,
+least squares in the scaled basis, Pauta flags iterated, refit, segment metrics) once for all
+sensors: per clock group :mod:`.prepare` and :mod:`.metrics`; the solve by :mod:`.kernels`
+(``solver="numba"``) or :mod:`.xla` (``"gram"``, ``"qr"``). b_s = argmin sum_i w_si
+(y_si - X(z'_si) b)^2, w = samples per block (0 for empty or padding), s^2 on m_s - p
+degrees of freedom. ``orders`` must name one order.
 """
 
 from __future__ import annotations

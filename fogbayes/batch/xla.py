@@ -1,18 +1,8 @@
 """The vectorised fit's least squares and bias as ``jax.jit(jax.vmap(...))`` programs.
 
-The same equations as the compiled CPU loops of :mod:`.kernels`, as one XLA program over
-all sensors: the path a GPU or TPU runs (``solver="gram"``, the default there), and the
-workflow's own QR solver (``"qr"``) for comparison. Per sensor ``s``::
-
-    z'_s = (z_s - centre_s) / scale_s                (the sensor's own scaled basis)
-    b_s  = argmin_b sum_i w_si (y_si - X(z'_si) b)^2  (w = samples per block)
-
-``"gram"`` solves the normal equations (:func:`fogbayes.inference.lsq.lstsq_gram`; same
-numbers as QR to ~1e-12 in a scaled basis), ``"qr"`` uses
-:func:`~fogbayes.inference.lsq.lstsq`. XLA multiplies every row, so rows of weight 0 (empty
-blocks, padding) are given finite values here; the residual variance uses each sensor's
-own ``m_s - p`` degrees of freedom, as the workflow does. On a CPU these programs are
-slower than a loop over sensors (memory-bound: benchmarks/RESULTS_batch.md).
+The equations of :mod:`.kernels` as one XLA program (GPU/TPU): ``"gram"``
+(:func:`fogbayes.inference.lsq.lstsq_gram`) or ``"qr"`` (:func:`~fogbayes.inference.lsq.lstsq`);
+rows of weight 0 get finite values; s^2 on each sensor's m_s - p degrees of freedom.
 """
 
 from __future__ import annotations
