@@ -1,30 +1,12 @@
 """Overlapping Allan deviation of a record larger than memory, in one streaming pass.
 
-:func:`stream_allan` reads the output column chunk by chunk (:mod:`.sources`), converts it
-to a rate in ``unit``, places it on the uniform sample grid and feeds the accumulators of
-:mod:`fogbayes.stats.allan_accumulators`. The numbers are those of :func:`fogbayes.stats.allan.allan_deviation`
-(``kind="oadev"``) and of the Allan workflow (which also places the rate on its grid, see
-:func:`fogbayes.allan.workflow.uniform_rate`) to rounding, about 1e-12 relative.
-
-Memory bound: the accumulators keep the last ``2 max(m)`` samples' worth of block sums or
-phase, so memory is ``O(max_lag + chunk)`` and independent of the file's length
-(``StreamAllan.memory_bytes`` reports it). Cluster sizes above ``max_lag`` (a memory budget)
-are not computed; they are listed in ``skipped``. With the default 2^22 (42 s at 100 kHz,
-11.6 h at 100 Hz) the octave pyramid holds about 16 (max_lag + levels x chunk) bytes = 70 MB,
-the phase window of other grids about 2 x 8 x 4 max_lag = 270 MB (+130 MB with gaps). The
-in-memory :func:`~fogbayes.stats.allan.allan_deviation` has no such limit because it holds
-the whole phase (8 bytes per sample) and computes any m up to n/4 (Stable32's stop ratio);
-to get those taus for a huge record, average it into blocks of b samples first (the
-overlapping estimate on block means uses only every b-th start, a different, slightly
-noisier estimator) or raise ``max_lag`` if 16-32 bytes x max_lag fits in memory.
-
-Time grid (``grid="time"``, as the workflow; the default ``"auto"`` uses it when the file has
-a time column): sample ``i`` sits at ``k_i = rint((t_i - t_0)
-fs)`` and must lie within ``tolerance`` periods of it; missing grid points are NaN (every
-term that touches one is excluded, never interpolated). This needs the time column: one
-extra pass to find the record's length on the grid and, without a sample rate in the
-metadata or ``fs``, the exact median step (:mod:`.scan`). ``grid="index"`` takes the rows as
-consecutive samples and reads the output column only (NaN in it = missing).
+:func:`stream_allan` reads the output in chunks (:mod:`.sources`), converts it to ``unit``,
+places it on the sample grid and feeds :mod:`fogbayes.stats.allan_accumulators`: the numbers of
+:func:`fogbayes.stats.allan.allan_deviation` (``oadev``) to rounding. Memory O(max_lag + chunk)
+(``StreamAllan.memory_bytes``); cluster sizes above ``max_lag`` are listed in ``skipped``.
+``grid="time"``: sample i at k_i = rint((t_i - t_0) fs) within ``tolerance``, missing points NaN
+(as :func:`fogbayes.allan.workflow.uniform_rate`; median step from :mod:`.scan`);
+``grid="index"``: rows are consecutive samples.
 """
 
 from __future__ import annotations

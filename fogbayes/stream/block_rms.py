@@ -1,10 +1,7 @@
 """The loop's 10 s RMS (:func:`fogbayes.loop.metrics.block_rms`) of a record read in chunks.
 
-    rms = sqrt(mean_b m_b^2),  m_b the mean of block b's unflagged samples
-
-Blocks as :func:`fogbayes.preprocess.blocks.block_average` with ``partial="keep"``, summed by
-:class:`.blocks.BlockSums` (O(1) memory); a block whose samples are all flagged has no mean
-and is left out. The sums differ from the in-memory ones only in rounding.
+rms = sqrt(mean_b m_b^2), m_b the mean of block b's unflagged samples
+(:func:`fogbayes.preprocess.blocks.block_average`, ``partial="keep"``, by :class:`.blocks.BlockSums`).
 """
 
 from __future__ import annotations

@@ -1,17 +1,9 @@
 """Block sums of a record read in chunks: the grid of :func:`fogbayes.preprocess.blocks.block_index`.
 
-Each run between gaps (the time scan's runs, the same gap rule) is cut into ``window_s``
-blocks from its first sample::
-
-    k = floor((t - t_run + slack) / window_s),   slack = max(1e-3 median step, 16 ulp of max |t|)
-
-Blocks are contiguous in sample order, so a block is finished as soon as the next one starts:
-:meth:`BlockSums.add` returns the blocks a chunk finished, :meth:`BlockSums.close` the last
-one. Memory is O(1) in the record's length. A block cut by a chunk boundary is summed in two
-parts, so sums differ from the in-memory ones only in rounding.
-
-A block is *complete* (``partial="drop"`` keeps only those) when its run covers its whole
-window: ``t_run + (k + 1) window_s <= t_last + dt + slack``.
+Each run between gaps is cut into ``window_s`` blocks, k = floor((t - t_run + slack) / window_s),
+slack = max(1e-3 median step, 16 ulp of max |t|). :meth:`BlockSums.add` returns the blocks a
+chunk finished, :meth:`BlockSums.close` the last; O(1) memory. Complete (``partial="drop"``):
+t_run + (k + 1) window_s <= t_last + dt + slack.
 """
 
 from __future__ import annotations

@@ -1,26 +1,11 @@
 """Compensate a record larger than memory, chunk by chunk, into a file.
 
-:func:`compensate_stream` does what :func:`fogbayes.thermal.workflow.compensate_recording`
-(``bias-t``, ``thermal``) and :func:`fogbayes.composite.workflow.compensate_recording`
-(``composite``) do, with the same compensators as compiled CPU loops (chunks live in host
-memory, whatever JAX's default device; a loop takes a chunk of any length, so nothing is
-padded or cut), one chunk at a time:
-
-* bias-t / thermal: covariates per chunk (:mod:`.covariates`, with the record's time scan
-  when a temperature rate is used), clamped to the fit's valid range, ``y - X(z) @ coef`` in
-  deg/h, converted back to the input unit; the 3-sigma flags by :mod:`.pauta` (one pass per
-  iteration: the compensated values are recomputed each pass rather than stored, which
-  costs CPU but no disk). Passes over the input: the scan (thermal: up to 5 over the time
-  column), the flag iterations + 1, and the writing pass.
-* composite: the operating time (time since the last input-rate step, carried across
-  chunks) and the Halley inversion; ``outlier`` where it is not invertible. One pass.
-
-Results equal the in-memory path where JAX runs on the CPU: bit for bit for bias-t, composite
-and the block-difference temperature rates; to rounding (~1e-15 of the temperature-rate term)
-with Savitzky-Golay windows longer than 501 samples (FFT) -- see :mod:`.covariates`. With a GPU
-as JAX's default the in-memory path runs XLA there: equal to rounding, not bit for bit.
-Output columns as the in-memory dicts: ``time`` (optional), ``output`` (``rate`` for
-composite), ``outlier``.
+:func:`compensate_stream` does what :func:`fogbayes.thermal.workflow.compensate_recording` and
+:func:`fogbayes.composite.workflow.compensate_recording` do, with the compiled CPU compensators:
+bias-t / thermal ``y - X(z) @ coef`` on clamped covariates (:mod:`.covariates`), 3-sigma flags by
+:mod:`.pauta` (one pass per iteration); composite: operating time carried across chunks and the
+Halley inversion. Equal to the in-memory path on CPU (bit for bit, or to rounding for FFT
+Savitzky-Golay windows). Columns: ``time``, ``output`` (``rate``), ``outlier``.
 """
 
 from __future__ import annotations

@@ -1,25 +1,9 @@
 """Thermal-model covariates (T, dT/dt, extra channels) of a streamed record, chunk by chunk.
 
-:func:`fogbayes.thermal.model.thermal_covariates` works on the whole record. The
-temperature rate is not local: a Savitzky-Golay derivative looks ``w // 2`` samples each way
-and fits the ``w`` first/last samples of each run between gaps; the block-difference rate
-(``difference``, paper 004's ``paper``) uses the means of the neighbouring blocks, on a grid
-that starts at each run's first sample. So each chunk is computed on a window that adds a
-halo of ``H`` rows on each side, with the record-wide facts taken from a
-:class:`~fogbayes.stream.scan.TimeScan` (median step, run bounds and starts, per-run step
-statistics), and only the chunk's own rows are kept:
-
-* ``savgol``: ``H = w`` samples (window plus edge fit). Rows of the chunk then see the same
-  samples as in memory. Windows up to 501 samples use a direct convolution (identical numbers);
-  longer ones go through an FFT whose rounding depends on the array it is given, and each
-  run's mean is removed first, so values agree to rounding of the temperature's variation
-  (~1e-15 relative), not bit for bit. A run whose steps vary by <= 1e-9 is an exact grid
-  with step = its mean step (the scan's compensated sum: ulp-level too).
-* ``difference`` / ``paper``: ``H = ceil(3 W / min step) + 2`` rows (three blocks of
-  ``W`` s). Block means are sums in the same order as in memory (``np.bincount``), the
-  interpolation is ``np.interp`` on the same points: bit-identical.
-
-Memory: ``rows + 2 H`` rows of the needed columns.
+As :func:`fogbayes.thermal.model.thermal_covariates`, on each chunk plus a halo of ``H`` rows,
+with record-wide facts from a :class:`~fogbayes.stream.scan.TimeScan`: ``savgol`` H = w
+(identical up to 501 samples, FFT beyond: equal to rounding); ``difference`` / ``paper``
+H = ceil(3 W / min step) + 2 (bit-identical). Memory: ``rows + 2 H`` rows.
 """
 
 from __future__ import annotations

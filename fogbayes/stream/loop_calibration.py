@@ -1,30 +1,12 @@
 """Apply a loop calibration (``fogbayes loop --json``) to a record larger than memory.
 
-The in-memory path (:func:`fogbayes.loop.calibration.apply_calibration`) uses four things
-computed over the whole record; each is a small summary that a pass over the chunks builds
-exactly:
-
-* the spike flags (:func:`fogbayes.diagnose.context.spike_flags`): the median of the first
-  differences of the rate and their MAD, by exact radix selection (:mod:`.select`, up to
-  four passes each); a sample's flag then needs only its two neighbours (one row of the
-  next chunk is read ahead);
-* the block grid: its step from the record's span and sample rate (the time scan), each
-  sample's block from its own time, and the used-sample count per block (one pass);
-* dT/dt: the Savitzky-Golay slope of the block-mean temperature, the spline through it and
-  the chamber's corners (:class:`fogbayes.diagnose.covariates.RateCurve`), built from the
-  block sums of that same pass (summed in sample order, as ``np.bincount``) and evaluated
-  on each chunk's own samples;
-* filters with memory: the first-order lag and the play operator carry their state from
-  chunk to chunk (:meth:`fogbayes.diagnose.kinds.Kind.chunk_columns`), and so does the
-  operating time of a rate-table run.
-
-Then one writing pass evaluates the terms chunk by chunk: the bias family subtracts the
-bias (and the 10 s RMS before/after accumulates, :mod:`.block_rms`, with the bias
-stability before/after, :mod:`.stability`), the composite family
-solves for the input rate per sample (:func:`fogbayes.loop.compensate.solve_rate`). Results equal the in-memory path: the
-flags, block grid and dT/dt bit for bit; the lag to rounding (its recursion restarts from
-the carried value). Passes over the input: the time scan, the two selections, the block
-pass and the writing pass.
+The four whole-record inputs of :func:`fogbayes.loop.calibration.apply_calibration`, each built
+exactly from chunks: spike flags (:func:`fogbayes.diagnose.context.spike_flags`, median and MAD
+by :mod:`.select`), the block grid, dT/dt (:class:`fogbayes.diagnose.covariates.RateCurve` from
+block sums) and filter state carried between chunks
+(:meth:`fogbayes.diagnose.kinds.Kind.chunk_columns`). A writing pass then subtracts the bias
+(with :mod:`.block_rms` and :mod:`.stability`) or solves for the rate
+(:func:`fogbayes.loop.compensate.solve_rate`).
 """
 
 from __future__ import annotations

@@ -1,15 +1,8 @@
 """The iterated 3-sigma (Pauta) rule over a stream, one pass per iteration.
 
-:func:`fogbayes.preprocess.pauta_flags` (no detrending) iterates: with ``keep`` the samples
-not yet flagged, ``m`` and ``s`` their mean and standard deviation (n - 1), flag
-``keep & |x - m| > n_sigma s``; stop when nothing new is flagged. Because flags only
-accumulate, the final set is the union over the iterations that flagged something of
-``{|x - m_j| > thr_j}``, so it is a function of the (m_j, thr_j) history alone: no mask
-is stored. Pass ``p`` applies the history, counts what iteration ``p - 1`` adds, and
-accumulates the mean and variance of the samples still kept (Chan et al.'s pairwise
-update of count, mean and sum of squared deviations, chunk by chunk), which agree with
-NumPy's to about 1e-15 relative, so a flag can only differ for a sample within that
-distance of the threshold. Memory: one chunk.
+As :func:`fogbayes.preprocess.pauta_flags`: flag keep & |x - m| > n_sigma s until nothing new.
+The final set is the union of {|x - m_j| > thr_j} over the iterations, so no mask is stored;
+each pass accumulates the kept samples' mean and variance (Chan et al.'s pairwise update).
 """
 
 from __future__ import annotations

@@ -1,17 +1,8 @@
 """Sampling facts of a large recording from its time column: exact median step, gaps, runs.
 
-The in-memory code derives several choices from ``np.median(np.diff(t))`` over the whole
-record: the gap rule (a step longer than ``gap_factor`` median steps, see
-:func:`fogbayes.preprocess._checks.segment_bounds`), the Savitzky-Golay window in samples,
-the block-grid slack, the sample rate of :attr:`fogbayes.data.Recording.sample_rate`. A
-streaming computation must make the same choices, so it needs the same median, exactly:
-
-* the median is found by radix selection (:func:`.select.stream_median`): at most four
-  passes over the time column, fewer when the steps in the chosen bucket are all equal; for
-  an even count it is the mean of the two middle steps, as ``np.median``.
-* one more pass records the gaps and, per run between gaps, its first and last row, first
-  time, and the min, max and mean of its steps (the Savitzky-Golay code treats a run whose
-  steps vary by <= 1e-9 as an exact grid with step = their mean). Memory: O(number of runs).
+The median of the steps by radix selection (:func:`.select.stream_median`, as ``np.median``);
+one more pass records the gaps (:func:`fogbayes.preprocess._checks.segment_bounds`' rule) and,
+per run, its rows, first time and min/max/mean step. Memory O(runs).
 """
 
 from __future__ import annotations

@@ -1,15 +1,8 @@
 """Exact order statistics (medians) of a value stream too large to hold: radix selection.
 
-A double maps to an unsigned 64-bit key that orders like the value itself (for x >= 0 the
-bit pattern with the sign bit set; for x < 0 all bits flipped)::
-
-    key(x) = bits(x) | 2^63   (x >= 0),     ~bits(x)   (x < 0)
-
-Each pass over the stream histograms the next 16 bits of the keys that share the prefix
-found so far (65 536 counters per wanted rank): at most four passes, fewer when every value
-in the chosen bucket is equal (its min and max are tracked). The result is the value of
-that rank in the sorted stream, exactly: the medians equal ``np.median`` of the whole array
-(mean of the two middle values for an even count). Memory: O(65 536) per rank.
+key(x) = bits(x) | 2^63 (x >= 0), ~bits(x) (x < 0) orders like x; each pass histograms the next
+16 bits among keys sharing the found prefix (at most four passes). Equals ``np.median``; memory
+O(65 536) per rank.
 """
 
 from __future__ import annotations

@@ -1,34 +1,11 @@
 """Chunk iterators over a recording too large to load: NPZ, .npy and Parquet.
 
-:func:`open_source` reads only a file's header (column names, length, metadata) and gives a
-:class:`RecordSource` whose :meth:`~RecordSource.chunks` yields :class:`Chunk` s of a fixed
-number of rows (the last one shorter), each converted to float64 and validated like a
-:class:`fogbayes.data.Recording` (finite values, strictly increasing time across chunk
-boundaries), with errors naming the file, the column and the global row.
-
-Units as :func:`fogbayes.data.load` takes them: ``time_unit`` (``ms``, ``us``, ``ns``: times
-are divided into seconds) and ``temperature_scale``/``temperature_offset`` (deg C = scale x
-value + offset, for raw sensor words or kelvin), applied to each chunk as it is read. The
-same plausibility rules hold: a temperature outside -100 ... 200 deg C, or a first chunk
-whose median time step means a sample rate outside 1e-4 Hz ... 1 MHz, stops the stream with
-an error naming the file, the column and (for a temperature) the global row.
-
-Formats (the column contract of :mod:`fogbayes.data.io`):
-
-* ``.npz`` as :func:`fogbayes.data.save` writes it: one 1-D member per column, metadata in
-  ``__meta__``. Members are read as streams (``np.load(mmap_mode="r")`` does not map NPZ
-  members); a member stored uncompressed is read straight from the file, a deflated one is
-  decompressed on the fly. Either way one chunk of each column is in memory at a time.
-* a directory of ``<column>.npy`` files (optional ``meta.json``), a single ``.npy`` with a
-  structured dtype (one field per column), or a plain 1-D ``.npy`` (the ``output`` column
-  alone, for the Allan deviation of a bare rate array). The header is parsed with
-  ``numpy.lib.format`` and the rows are read with ordinary file reads into a reused buffer.
-  Not through ``np.load(mmap_mode="r")``: pages of a memory map that have been touched count
-  in the process's resident set until the kernel reclaims them, so a mapped pass over an
-  8 GB file shows 8 GB of peak RSS; plain reads go through the page cache, which does not.
-* ``.parquet``: row groups via ``pyarrow.parquet.ParquetFile.iter_batches``, re-cut into
-  chunks of the fixed size. Memory also holds one decoded row group: write files with
-  bounded row groups (:mod:`fogbayes.stream.writers` uses the chunk size).
+:func:`open_source` reads the header and gives a :class:`RecordSource` whose
+:meth:`~RecordSource.chunks` yield float64 :class:`Chunk` s validated as a
+:class:`fogbayes.data.Recording` (errors name file, column and global row), with the units and
+plausibility rules of :func:`fogbayes.data.load`. Formats (:mod:`fogbayes.data.io`): ``.npz``
+members streamed; a folder of ``<column>.npy``, a structured or 1-D ``.npy`` read with plain
+reads (not mmap, to bound RSS); ``.parquet`` row groups re-cut to the chunk size.
 """
 
 from __future__ import annotations

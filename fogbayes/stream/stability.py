@@ -1,14 +1,8 @@
 """Bias and bias stability before/after (paper 004 eqs. 12-13) of a record read in chunks.
 
-The streamed form of :func:`fogbayes.stats.stability.stability_report`::
-
-    B0 = mean(F),   Bs(W) = sqrt( sum_b (m_b - m_bar)^2 / (n - 1) )
-
-with m_b the means of the complete ``W``-second blocks (``partial="drop"``: every sample, no
-flags, as the in-memory report), summed by :class:`.blocks.BlockSums`. The sums of m_b and
-m_b^2 are taken about the first block's mean, so a bias of 1e3 deg/h under a stability of
-1e-3 deg/h loses no digits to cancellation. A window shorter than the median step, or one
-that leaves fewer than two complete blocks, has no row (as in memory). Memory is O(1).
+Streamed :func:`fogbayes.stats.stability.stability_report`: B0 = mean(F),
+Bs(W) = sqrt(sum_b (m_b - m_bar)^2 / (n - 1)) over complete ``W``-second blocks
+(:class:`.blocks.BlockSums`), sums taken about the first block's mean. O(1) memory.
 """
 
 from __future__ import annotations

@@ -1,27 +1,10 @@
 """Write a large result column by column, chunk by chunk, without holding it in memory.
 
-:func:`open_sink` picks the format from ``path``:
-
-* a directory (a path without a suffix, or ending in ``/``): one ``<column>.npy`` per
-  column. Each file gets its final header first (the row count is known) and the chunks
-  are appended with plain writes, so the result is an ordinary .npy that
-  ``np.load(mmap_mode="r")`` maps. Plain writes and not a writable memory map: the dirty
-  pages of a map stay in the process's resident set, plain writes go through the page cache.
-* ``.npz``: the same .npy files are written next to the target first and then stored (not
-  compressed, ZIP64) into the archive one after the other, then removed. Readable by
-  ``numpy.load`` and :func:`fogbayes.data.load` (and streamable by :mod:`.sources`).
-* ``.parquet``: one row group per chunk through ``pyarrow.parquet.ParquetWriter``.
-
-Memory: one chunk of each column.
-
-Never half-written (:mod:`fogbayes.data.atomic`): everything is written under a hidden
-temporary name beside the target (``.<stem>.tmp-<pid>-<random>...``: the folder, the
-``.npz`` with its ``.parts`` folder, the ``.parquet``) and renamed into place by
-:meth:`Sink.close` once complete and flushed to disk; :meth:`Sink.abort` (also run when a
-``with`` block of the sink raises, Ctrl-C and SIGTERM included) removes it, leaving the
-target as it was. A folder target that exists is replaced as a whole, and only if it holds
-nothing but ``.npy`` files (an earlier output); a folder with anything else is refused
-before work starts (:func:`check_sink`).
+:func:`open_sink`: a folder of ``<column>.npy`` (final header first, plain appends), ``.npz``
+(those files stored uncompressed, ZIP64) or ``.parquet`` (one row group per chunk). Atomic
+(:mod:`fogbayes.data.atomic`): written under a hidden temporary name, renamed by
+:meth:`Sink.close`, removed by :meth:`Sink.abort`; an existing folder target is replaced only if
+it holds nothing but ``.npy`` files (:func:`check_sink`).
 """
 
 from __future__ import annotations
