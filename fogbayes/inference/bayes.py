@@ -1,31 +1,10 @@
 """Posterior of a linear-in-parameters model with white or ARMA(p, q) noise (NumPyro NUTS).
 
-Model (on standardised data, y' = (y - mean y) / sd y; results mapped back)::
-
-    y = X beta + e,      beta_k ~ Normal(0, prior_scale)            (X: a scaled basis)
-    e white:             e_t ~ Normal(0, sigma^2)
-    e ARMA(p, q):        e_t = sum phi_i e_{t-i} + a_t - sum theta_j a_{t-j},  a_t ~ N(0, sigma^2)
-                         phi = pacf_to_ar(r), r_k ~ Uniform(-1, 1)  (stationary by construction)
-                         theta = pacf_to_ar(s), s_k ~ Uniform(-1, 1) (invertible)
-    sigma ~ HalfNormal(1)
-
-The ARMA likelihood is the exact Gaussian one of :func:`fogbayes.models.arma.arma_loglik`
-(closed form for AR(p), Kalman filter otherwise). Why it matters: gyro residuals are
-coloured (bias instability, Markov noise); assuming white noise treats n correlated block
-means as independent and gives intervals too narrow by about sqrt((1 + phi)/(1 - phi)) for
-AR(1) noise -- the coverage test in ``tests/test_thermal_bayes.py`` measures it.
-
-A single fit holds its series in ``bucket_length(n)`` samples (:mod:`fogbayes.models.buckets`)
-with the tail masked out of the likelihood (``n_valid``), so records of nearby lengths share
-one compiled sampler; a batch keeps its own length (its one compile serves every sensor).
-
-Pointwise log-likelihoods for WAIC/LOO are the one-step-ahead predictive densities
-log N(v_t; 0, F_t) from the Kalman filter (their sum is the exact likelihood). For time
-series this is a leave-one-step-ahead score, the usual reading of LOO on such data.
-
-Convergence is reported, never assumed: split R-hat and bulk/tail ESS (ArviZ) over all
-coefficients and noise parameters, divergent transitions; ``converged`` requires R-hat <
-1.01, bulk ESS >= 100 per chain and no divergences.
+On standardised data: y = X beta + e, beta_k ~ N(0, prior_scale), sigma ~ HalfNormal(1); e white,
+or ARMA(p, q) with phi = pacf_to_ar(r), theta = pacf_to_ar(s), r, s ~ U(-1, 1) (stationary,
+invertible), exact likelihood :func:`fogbayes.models.arma.arma_loglik`. Series are padded to
+``bucket_length(n)`` (:mod:`fogbayes.models.buckets`, tail masked). Pointwise log-likelihoods:
+Kalman one-step-ahead densities. ``converged``: :mod:`fogbayes.inference.convergence`.
 """
 
 from __future__ import annotations

@@ -1,25 +1,9 @@
 """Model and order comparison: paper 000's RMS criterion, WAIC and PSIS-LOO.
 
-RMS criterion (paper 000, eq. 11): for a fit with d + 1 coefficients (a polynomial of
-order d) to n points, choose the order with the smallest::
-
-    sigma_d = sqrt( sum_j (k_j - k_hat_j)^2 / (n - d - 1) )
-
-i.e. the residual standard deviation with the degrees of freedom left. With several
-covariates the denominator is ``n - n_params`` (the same thing for one polynomial).
-Caveat: it treats the residuals as independent. On a simulated paper-004 run (1 s blocks,
-coloured noise) every adequate order scored within 0.01 % of the others (0.48929 ...
-0.48931 deg/h for T orders 2-3, rate orders 1-2), so which one wins is decided by noise;
-only the inadequate orders stand out. WAIC/LOO under the AR-noise posterior weigh the
-evidence with the correlation taken into account (``order_criterion="loo"`` in the thermal
-workflow).
-
-WAIC and LOO come from ArviZ 0.23 (``az.waic``, ``az.loo``; the 0.x line still has
-``waic``, see docs/DESIGN.md), called here and nowhere else: :func:`information` of a
-pointwise log-likelihood (:func:`loglik_idata`) -- the linear Bayes fits', the Allan and
-ARMA posteriors', the composite cells', the loop's Kalman one-step densities -- and
-:func:`difference` of two fits with its standard error; :func:`compare` ranks several fits
-by expected log predictive density (higher is better).
+RMS criterion (paper 000 eq. 11): sigma_d = sqrt(sum (k - k_hat)^2 / (n - n_params)), smallest
+wins (assumes independent residuals). WAIC and LOO by ArviZ (``az.waic``, ``az.loo``), called
+only here: :func:`information` of a pointwise log-likelihood (:func:`loglik_idata`),
+:func:`difference` of two fits with its standard error, :func:`compare` ranking by elpd.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
-"""The one convergence rule of every posterior fogbayes samples::
+"""The one convergence rule of every posterior fogbayes samples.
 
-    converged = max R-hat < 1.01  and  min bulk ESS >= floor  and  no divergent transition
-
-R-hat is the rank-normalised split R-hat and ESS the bulk ESS of Vehtari et al. (2021),
-whose advice is R-hat < 1.01 and ESS >= 100 per chain: the default floor. The Allan and
-population posteriors ask 200 in all (their K-R ridge and the population spread mix
-slowly; :mod:`fogbayes.allan.bayes`). A non-finite R-hat or ESS (a constant chain) fails.
+converged = max R-hat < 1.01 and min bulk ESS >= floor and no divergent transition (rank-normalised
+split R-hat and bulk ESS, Vehtari et al. 2021; default floor 100 per chain, Allan and population
+posteriors 200 in all). A non-finite R-hat or ESS fails.
 """
 
 from __future__ import annotations

@@ -1,17 +1,8 @@
 """Many bounded L-BFGS-B minimisations in lockstep, their objectives evaluated as one batch.
 
-SciPy's L-BFGS-B asks for one ``(f, grad)`` at a time. Each of K minimisations runs
-unchanged in its own thread; its objective posts the point it wants and waits. When every
-running minimisation has posted (or finished), the posted points are evaluated by one call
-of ``batch(rows, points) -> (values (b,), grads (b, d))`` and the waiters resume. So each
-minimisation takes exactly the steps it would take alone, while the expensive part (here a
-vmapped Kalman filter and its gradient) runs once per round for all of them: on the 2-core
-box one value-and-gradient of a 900-block filter costs 9.7 ms alone and 39 ms for 16 at once
-(benchmarks/RESULTS_loop.md).
-
-``rows[i]`` says which minimisation (index into the starts) asked for ``points[i]``, so the
-batch function can pick that problem's data. Threads only wait on each other: the Python
-work between evaluations is L-BFGS-B's own (small), the batch call releases the GIL.
+Each SciPy L-BFGS-B runs in its own thread and posts the point it wants; when all running ones
+have posted, ``batch(rows, points) -> (values (b,), grads (b, d))`` evaluates them at once
+(``rows[i]``: which minimisation). Each takes exactly the steps it would alone.
 """
 
 from __future__ import annotations

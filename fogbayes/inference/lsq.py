@@ -1,23 +1,10 @@
 """Least squares: closed form (QR) for linear models, optax L-BFGS for the general case.
 
-Weighted linear least squares, ``min_b sum_i w_i (y_i - X_i b)^2``, solved by a QR
-factorisation of the row-scaled design ``sqrt(w) X = Q R``::
-
-    b_hat = R^{-1} Q^T sqrt(w) y
-    s^2   = sum_i w_i r_i^2 / (n - p)                   (residual variance, dof = n - p)
-    Cov   = s^2 (R^T R)^{-1} = s^2 R^{-1} R^{-T}
-
-(QR, not the normal equations: the condition number is that of X, not its square.) The
-covariance assumes independent errors; for coloured gyro noise use
-:func:`fogbayes.inference.bayes.fit_linear_bayes` with an AR noise model.
-
-The optax path minimises any smooth loss with L-BFGS inside one ``lax.while_loop``
-(:func:`minimize`); :func:`fit_nonlinear` applies it to a residual function and returns
-the Gauss-Newton covariance ``s^2 (J^T J)^{-1}``. For a linear model both paths must
-agree (:func:`lstsq_optax` is that check, and the general path for users who add a
-penalty).
-
-Everything is jit- and vmap-able (a batch of sensors is ``jax.vmap(lstsq)``).
+min_b sum_i w_i (y_i - X_i b)^2 with sqrt(w) X = QR: b = R^-1 Q' sqrt(w) y,
+s^2 = sum w r^2 / (n - p), Cov = s^2 R^-1 R^-T (independent errors; coloured noise:
+:func:`fogbayes.inference.bayes.fit_linear_bayes`). :func:`minimize` (L-BFGS in one
+``lax.while_loop``), :func:`fit_nonlinear` (Gauss-Newton covariance s^2 (J'J)^-1),
+:func:`lstsq_optax`; all jit- and vmap-able.
 """
 
 from __future__ import annotations

@@ -1,20 +1,10 @@
 """Maximum-likelihood noise hyperparameters of :mod:`fogbayes.inference.noise_ssm`, one or many fits.
 
-The profile likelihood (beta and s2 maximised, module doc of ``noise_ssm``) is maximised
-over theta = (log flicker, log walk, Markov log variances and log time constants) by
-L-BFGS-B within :func:`~fogbayes.inference.noise_ssm.bounds`. It is often bimodal (a random
-walk or the flicker bank explaining the same slow wander), so each fit starts from a small
-grid, keeps the best start of up to ``n_starts`` distinct regions and returns the best
-optimum.
-
-:func:`fit_noise_many` fits several problems that share the block grid (mask, weights) --
-the Bartlett bootstrap's simulated series, each under two models -- and :func:`fit_noise` is
-its one-problem case. With several problems every start of every problem is minimised in
-lockstep (:func:`fogbayes.inference.lockstep.minimize_lockstep`): each takes the steps it
-would take alone, and the Kalman filters of one round run as one vmapped program. One
-problem's few starts run one after another on the unbatched program, as before: a batched
-program costs a compilation per batch size that 1-3 rows do not repay (measured: a 3 h loop
-record took 27 s with them in lockstep, 22 s without).
+The profile likelihood is maximised over theta (log flicker, log walk, Markov log variances and
+time constants) by L-BFGS-B within :func:`~fogbayes.inference.noise_ssm.bounds`, from a small grid
+of starts (up to ``n_starts`` regions; it is often bimodal). :func:`fit_noise_many` runs problems
+sharing a block grid in lockstep (:func:`fogbayes.inference.lockstep.minimize_lockstep`);
+:func:`fit_noise` is its one-problem case.
 """
 
 from __future__ import annotations

@@ -1,40 +1,11 @@
 """O(n) Gaussian likelihood of a regression under white + flicker + Markov + random-walk noise.
 
-Model for block means y_t (t = 0..n-1, step ``dt`` seconds; missing blocks allowed)::
-
-    y_t = x_t' beta + 1' s_t + e_t,              e_t ~ N(0, s2 w_t)        (white, w_t = m_ref/m_t)
-    s_{t+1,j} = phi_j s_{t,j} + u_{t,j},         u_{t,j} ~ N(0, s2 q_j)
-
-with a diagonal state of three kinds of component, all variances relative to ``s2``:
-
-* a *flicker bank*: J first-order Gauss-Markov components with fixed time constants
-  tau_j spaced by sqrt(10) and one shared stationary variance ``v_f`` (phi_j = exp(-dt/tau_j),
-  q_j = v_f (1 - phi_j^2)). Equal variance per log-spaced Lorentzian sums to a 1/f
-  spectrum over [1/tau_J, 1/tau_1], so one parameter stands for bias instability;
-* M free Gauss-Markov components (variance v_m, time constant tau_m) -- ``markov_noise``;
-* a random walk (phi = 1, q = v_rw) that starts at 0: its initial level is the intercept.
-
-The Kalman filter's covariance recursion does not depend on the data, so one pass filters
-every column of ``[y, X]`` with the same gains: the innovations of X are the columns of
-L^-1 X for the Cholesky factor L of the noise covariance. Hence the GLS normal equations
-and the exact profile likelihood (beta and s2 maximised) cost O(n d^2 + n d C)::
-
-    S = sum_t m_t v_t v_t' / F_t,  v_t = innovations of [y, X],   beta = S_XX^-1 S_Xy
-    RSS = sum_t m_t r_t^2 / F_t,  r = v^y - v^X beta,  s2 = RSS / n_obs
-    log L = -1/2 [ n_obs log(2 pi s2) + sum_t m_t log F_t + n_obs ]
-
-**Precision.** RSS is summed from the whitened residual, not taken as ``S_yy - S_yX beta``:
-that difference of two quadratic forms of the size of y loses ~eps |y|^2 / RSS of its
-relative precision where y is large beside the noise (a rate table's output, ~1e5 deg/h
-against ~0.1 deg/h of noise). On such a record the profile log-likelihood moved by up
-to 1.9 nats between log-flicker values 0.002 apart, L-BFGS-B stopped wherever that noise
-stalled its line search, and the loop's base fit differed by up to 31 % in RMS between
-two installs (benchmarks/RESULTS_loop.md); from the residual the error is ~eps |y| / |r|
-per block (``tests/test_noise_ssm_precision.py``).
-
-Noise hyperparameters (log relative variances, log time constants) are fitted by maximum
-likelihood with L-BFGS-B on the jitted gradient (:mod:`fogbayes.inference.noise_fit`). The whitened columns v_t / sqrt(F_t)
-(iid N(0, s2) under the model) are what the evidence code works with.
+y_t = x_t'beta + 1's_t + e_t, e_t ~ N(0, s2 w_t); s_{t+1,j} = phi_j s_{t,j} + u_{t,j}, u ~ N(0, s2 q_j):
+a flicker bank (tau_j spaced by sqrt(10), shared variance v_f: a 1/f spectrum), free Gauss-Markov
+components, and a random walk from 0. One Kalman pass whitens [y, X]: S = sum m v v' / F,
+beta = S_XX^-1 S_Xy, RSS = sum m r^2 / F (from the whitened residual, for precision),
+s2 = RSS / n_obs, log L = -1/2 [n_obs log(2 pi s2) + sum m log F + n_obs].
+Hyperparameters: :mod:`fogbayes.inference.noise_fit`.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
-"""One NUTS driver for every posterior fogbayes samples: warm-up and sampling of several
-chains as one function of (keys, starts, *data) (NumPyro's functional ``hmc`` API).
+"""One NUTS driver for every posterior fogbayes samples (NumPyro's functional ``hmc`` API).
 
-The data are arguments of the compiled function, not constants, so another data set of the
-same shapes reuses the compilation; callers cache the returned function per sampler size.
-Per chain: ``init_kernel`` (step size and mass adapted during warm-up, NumPyro's
-schedule), ``num_warmup`` kernel steps in one ``lax.scan`` whose states are dropped, then
-``num_samples`` steps keeping the draws and divergence flags.
+A function of (keys, starts, *data) that warms up and samples several chains: data are
+arguments, so same shapes reuse the compilation; ``num_warmup`` steps in one ``lax.scan``, then
+``num_samples`` keeping draws and divergences.
 """
 
 from __future__ import annotations
