@@ -1,47 +1,11 @@
-r"""NumPyro posterior of the five-term Allan model, with correlated AVAR estimates.
+"""NumPyro posterior of the five-term Allan model, with correlated AVAR estimates.
 
-Likelihood of the octave AVAR estimates :math:`\hat\sigma^2_j` (:mod:`.allan_data`): each is
-:math:`\sigma^2_j(\theta)\,\chi^2_{\nu_j}/\nu_j` marginally, made normal by the Wilson-Hilferty
-cube root :math:`z_j = ((\hat\sigma^2_j/\sigma^2_j)^{1/3} - 1 + v_j)/\sqrt{v_j}`,
-:math:`v_j = 2/(9\nu_j)`, and :math:`z \sim \mathcal N(0, C)` jointly (a Gaussian copula):
-
-.. math::
-
-    \log p(\hat\sigma^2 \mid \theta) = \log \mathcal N(z; 0, C)
-        + \sum_j \log \left|\frac{dz_j}{d\hat\sigma^2_j}\right|.
-
-Both the EDF :math:`\nu_j` and the correlation :math:`C` are computed from the noise mixture
-at :math:`\theta` (:mod:`fogbayes.stats.allan_cov`), so neighbouring taus are not counted as
-independent evidence. Priors: :math:`\theta_p \sim \mathrm{HalfNormal}(3 e^{\ell_p})` with
-:math:`e^{\ell_p}` the value at which term ``p`` alone would explain the measured AVAR where
-it is most visible (a scale set by the data's units, weakly informative: the plausible range
-sits within one prior sd). A prior with finite density at 0 matters for terms the data barely
-resolve: a log-normal prior leaves a long flat tail towards 0 in log space that NUTS explores
-slowly (effective sample sizes of ~100 in 2000 draws); the half-normal's density vanishes
-like :math:`\theta` there.
-
-Datasheet prior (``prior=``, :mod:`.datasheet`): each term the sheet gives gets the
-log-normal :math:`\log\theta_p \sim \mathcal N(\log v_p, s_p^2)`,
-:math:`s_p = \ln L_p / 1.645` (90 % of the prior within a factor :math:`L_p` of the sheet
-value :math:`v_p`); the other terms keep the half-normal. The objection above is to a weakly
-informative log-normal, whose scale must be wide enough to be harmless and which therefore
-leaves the flat tail to 0; an informative one has no such tail (its log density falls off
-quadratically below :math:`\log v_p`), so an unresolved term's posterior is the
-likelihood's upper bound times a proper, concentrated prior, which NUTS mixes well. The
-sheet's parameters are traced arguments of the one compiled sampler (``on``, ``mu``, ``sd``
-per term; all off without a sheet), so fits with and without a sheet, or with another
-sheet, reuse it. Terms on the sheet are kept in term selection: the sheet says they exist,
-and a record too short to resolve them is the case the prior is for.
-
-Model discrepancy: when the fit without it fails a goodness-of-fit check
-(:math:`z^\top C^{-1} z` at the posterior median beyond the 99.9 % point of
-:math:`\chi^2_K`) it is refitted with an independent log-normal discrepancy
-:math:`\delta \sim \mathrm{HalfNormal}(0.05)` per estimate, and the result says so.
-
-Term selection: :func:`select_terms` compares models by PSIS-LOO (ArviZ) over the sequential
-factors :math:`\log p(\hat\sigma^2_j \mid \hat\sigma^2_{<j}, \theta)` of the joint
-likelihood (taus from short to long; they add up to it), so each longer-tau estimate is
-scored as a prediction from the shorter ones; WAIC is reported alongside.
+Wilson-Hilferty z_j = ((s2hat_j / s2_j)^(1/3) - 1 + v_j) / sqrt(v_j), v_j = 2 / (9 nu_j), z ~ N(0, C)
+(Gaussian copula): log p = log N(z; 0, C) + sum_j log|dz_j / ds2hat_j|, with nu and C at theta
+(:mod:`fogbayes.stats.allan_cov`). Priors theta_p ~ HalfNormal(3 e^{l_p}) (data scale); with a
+datasheet (:mod:`fogbayes.inference.datasheet`) log theta_p ~ N(log v_p, (ln L_p / 1.645)^2). A failed fit
+(z'C^-1 z beyond chi2_K 99.9 %) is refitted with a log-normal discrepancy HalfNormal(0.05).
+:func:`select_terms`: PSIS-LOO over the sequential factors p(s2hat_j | s2hat_<j, theta).
 """
 
 from __future__ import annotations

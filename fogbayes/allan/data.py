@@ -1,11 +1,8 @@
 """What the Allan noise fits see: octave AVAR estimates with their joint distribution.
 
-The fits use the overlapping AVAR at octave cluster sizes (non-redundant: each octave adds
-new information) and account for the remaining correlation between them through the exact
-covariance of :mod:`fogbayes.stats.allan_cov`, which depends on the noise mixture and so on
-the parameters. This module prepares that data once per record and provides the pieces the
-least-squares, GLS and Bayesian fits share: the log-space moments of the estimates, the prior
-scale of each term, and the covariance at given parameters.
+Prepared once per record: the log-space moments of the estimates, the prior scale of each
+term, and the covariance at given parameters (:mod:`fogbayes.stats.allan_cov`), shared by the
+least-squares, GLS and Bayesian fits.
 """
 
 from __future__ import annotations

@@ -1,27 +1,12 @@
-r"""Five-term Allan noise fits with intervals: the paper's least squares and GLS.
+"""Five-term Allan noise fits with intervals: the paper's least squares and GLS.
 
-* :func:`fit_paper_lsq` — paper 002's method: least squares of
-  :math:`\hat\sigma^2(\tau) = \sum_n a_n \tau^n` (non-negative :math:`a_n = C_n^2`, relative
-  weights so that every decade counts), converted with the paper's formulas
-  (:func:`fogbayes.allan.model.params_from_coefficients`). Intervals: sandwich covariance of
-  :math:`a_n` with :math:`\mathrm{Var}\,\hat\sigma^2 = 2\hat\sigma^4/\nu` (estimates taken as
-  independent, as the paper does), 90 % normal bounds on :math:`a_n` clipped at 0.
-* :func:`fit_wls` — generalised least squares in log-parameter space
-  :math:`\theta = \log(Q, N, B, K, R)`:
-  :math:`\min_\theta\ \tfrac12 r^\top V^{-1} r`, :math:`r_j = \log\hat\sigma^2_j -
-  \log\sigma^2_j(\theta) - b_j`, with :math:`b_j = \psi(\nu_j/2) - \log(\nu_j/2)` the mean of
-  :math:`\log(\chi^2_\nu/\nu)` and :math:`V` its covariance (trigamma variances, correlations of
-  the estimates from :mod:`fogbayes.stats.allan_cov`), recomputed at the estimate (3 passes,
-  more until the estimate settles, see :func:`_reweighted`);
-  Gauss-Newton with a trust region on the whitened residuals (SciPy, NumPy: five
-  parameters and ~20 taus, no compilation). A weak normal penalty (sd 10 in log) keeps terms that
-  are absent from running to zero. Intervals: :math:`\exp(\hat\theta \pm 1.645\,se)` with the
-  Gauss-Newton covariance :math:`(J^\top V^{-1} J)^{-1}`; the lower bound is 0 when dropping
-  the term raises the GLS chi-square by less than 2.71 (profile likelihood, 90 %).
-
-Both return :class:`AllanFit` with values in the canonical units of
-:mod:`fogbayes.allan.model`. The IEEE-952 slope readouts are in
-:mod:`fogbayes.allan.readout`.
+:func:`fit_paper_lsq`: paper 002, s2(tau) = sum_n a_n tau^n, a_n >= 0, relative weights,
+:func:`fogbayes.allan.model.params_from_coefficients`; sandwich covariance with
+Var s2hat = 2 s2^2 / nu. :func:`fit_wls`: GLS in theta = log(Q, N, B, K, R),
+r_j = log s2hat_j - log s2_j(theta) - (psi(nu_j/2) - log(nu_j/2)), V from trigamma variances and
+:mod:`fogbayes.stats.allan_cov`, reweighted (:func:`_reweighted`), penalty sd 10; intervals
+exp(theta +- 1.645 se), lower bound 0 when dropping the term costs < 2.71 in chi-square.
+Units: :mod:`fogbayes.allan.model`; slopes: :mod:`fogbayes.allan.readout`.
 """
 
 from __future__ import annotations

@@ -1,32 +1,11 @@
-r"""Allan-variance noise models as pure functions of tau (paper 002, table 1; IEEE 952).
+"""Allan-variance noise models as pure functions of tau (paper 002 table 1; IEEE 952); NumPy or JAX.
 
-NumPy in, NumPy out; JAX in, JAX out (:mod:`fogbayes.support.xp`): the same functions serve the
-direct fits and the NumPyro posteriors.
-
-Five-term model, sigma in deg/h and tau in s, parameters in canonical units::
-
-    sigma^2(tau) = 3 Q^2 / tau^2 + N_s^2 / tau + (2 ln2 / pi) B^2 + K_s^2 tau / 3 + R_s^2 tau^2 / 2
-
-    Q   arcsec       (= deg/h * s; 1 arcsec = 4.8481 urad)
-    N   deg/sqrt(h)  N_s = 60 N       deg/h * sqrt(s)
-    B   deg/h
-    K   deg/h^1.5    K_s = K / 60     deg/h / sqrt(s)
-    R   deg/h^2      R_s = R / 3600   deg/h / s
-
-Paper 002 writes the fit as sigma^2(tau) = sum_n C_n^2 tau^n (n = -2..2; its eq. 6 prints a
-sum of deviations, but its conversions are those of the variance form) and converts
-N = C_-1 / 60, B = C_0 / 0.664, K = 60 sqrt(3) C_1, R = 3600 sqrt(2) C_2, Q = C_-2 / sqrt(3);
-:func:`params_from_coefficients` and :func:`coefficients_from_params` are exactly these.
-(0.664 is the paper's rounding of sqrt(2 ln2 / pi) = 0.6643.)
-
-Extra terms of table 1: first-order Gauss-Markov noise with stationary std ``sigma`` and
-correlation time ``T_c`` (driving intensity q_c^2 = 2 sigma^2 / T_c),
-
-    sigma^2(tau) = (q_c T_c)^2 / tau * [1 - T_c / (2 tau) (3 - 4 e^{-tau/T_c} + e^{-2 tau/T_c})],
-
-and a sinusoid of amplitude Omega_0 and frequency f_0,
-sigma^2(tau) = Omega_0^2 (sin^2(pi f_0 tau) / (pi f_0 tau))^2 (the paper prints the inner ratio
-without its square; the squared form is IEEE 952's and is what a sinusoid gives).
+sigma^2(tau) = 3 Q^2/tau^2 + N_s^2/tau + (2 ln2/pi) B^2 + K_s^2 tau/3 + R_s^2 tau^2/2 (deg/h, s);
+Q arcsec, N deg/sqrt(h) (N_s = 60 N), B deg/h, K deg/h^1.5 (K_s = K/60), R deg/h^2 (R_s = R/3600).
+Paper 002's conversions of s2 = sum C_n^2 tau^n: :func:`params_from_coefficients`,
+:func:`coefficients_from_params`. Gauss-Markov (sigma, T_c):
+(q_c T_c)^2/tau [1 - T_c/(2 tau)(3 - 4 e^{-tau/T_c} + e^{-2tau/T_c})], q_c^2 = 2 sigma^2/T_c;
+sinusoid: Omega_0^2 (sin^2(pi f_0 tau) / (pi f_0 tau))^2.
 """
 
 from __future__ import annotations

@@ -1,22 +1,9 @@
-r"""IEEE Std 952 slope readouts of the noise terms from an ADEV curve (for comparison).
+"""IEEE Std 952 slope readouts of the noise terms from an ADEV curve (for comparison).
 
-The classic graphical method: find where the log-log ADEV curve has the slope of a term, lay
-a line of exactly that slope through the curve there, and read the coefficient off the line
-(sigma in deg/h, tau in s):
-
-* Q: slope -1 line, :math:`Q = \sigma(\tau)\,\tau/\sqrt3` (its value at tau = sqrt(3) s);
-* N: slope -1/2 line at tau = 1 h, :math:`N = \sigma(\tau)\sqrt{\tau/3600}` deg/sqrt(h);
-* B: the flat minimum, :math:`B = \min\sigma/0.664`;
-* K: slope +1/2 line at tau = 3 h, :math:`K = \sigma(\tau)\sqrt{3\cdot3600/\tau}` deg/h^1.5;
-* R: slope +1 line, :math:`R = 3600\sqrt2\,\sigma(\tau)/\tau` deg/h^2.
-
-The readout point is the tau whose local slope (centred difference over the neighbouring
-octaves) is closest to the term's slope, searched where an engineer would look: Q and N left
-of the ADEV minimum, K and R right of it, never at the longest tau (its estimate has a few
-degrees of freedom and its slope is one-sided); a term is not read (``None``) when no local
-slope there comes within 0.25 of it. The interval is the chi-square interval of sigma at that point
-carried through the same formula (it ignores the bias from the other terms, which is the
-method's main error).
+At the tau whose local slope is closest (within 0.25) to the term's: Q = sigma tau / sqrt3,
+N = sigma sqrt(tau / 3600), B = min sigma / 0.664, K = sigma sqrt(3 3600 / tau), R = 3600 sqrt2
+sigma / tau; Q, N left and K, R right of the minimum, never the longest tau; else ``None``.
+Interval: the chi-square interval of sigma there through the same formula.
 """
 
 from __future__ import annotations

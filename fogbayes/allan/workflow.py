@@ -1,35 +1,12 @@
 """Workflow for the ``allan`` model: Allan deviation and five-term noise fit of a Recording.
 
-``fit_recording`` (model ``allan``):
-
-1. the output as a rate in deg/h (``rec.rate("deg/h")``: the JSON is in canonical units
-   whatever the input unit) placed on a uniform time grid; time gaps become NaN samples and
-   every Allan term touching one is excluded (never interpolated);
-2. the overlapping ADEV on the requested tau grid with the Greenhall EDF of the identified
-   noise type and 90 % chi-square intervals (:func:`fogbayes.stats.allan.allan_deviation`);
-3. the noise fit on octave taus with their joint covariance: GLS in log space
-   (``bayes=False``, :func:`fogbayes.allan.fit.fit_wls`) or the NumPyro posterior
-   with term selection by PSIS-LOO (``bayes=True``, :mod:`fogbayes.allan.bayes`);
-   the shortest taus are left out while the GLS fit fails its goodness of fit (a sensor's
-   filters shape its first octaves: :func:`fogbayes.allan.fit.fit_range`);
-4. for comparison, paper 002's least-squares fit and the IEEE-952 slope readouts.
-
-Canonical units: Q arcsec (also given in urad), N deg/sqrt(h), B deg/h, K deg/h^1.5,
-R deg/h^2. An Allan model describes random noise: ``compensate_recording`` refuses.
-
-Options (``**options``, e.g. ``fogbayes fit --option taus=dense``): ``taus`` (octave, decade,
-dense, all), ``per_decade`` (20), ``select`` (True: term selection with ``bayes``),
-``num_warmup``/``num_samples``/``num_chains`` (sampler sizes), ``kind`` and
-``bias_corrected``: a second deviation of the same rate beside the OADEV the fit uses
-(any kind of :func:`fogbayes.stats.allan.allan_deviation`: ``mdev``, ``tdev``, ``hdev``,
-``ohdev``, ``totdev``, ``mtotdev``, ``ttotdev``, ``htotdev``, ``theo1``, ...), stored under
-``deviation`` (kind, bias_corrected, tau, dev, dev_low, dev_high, edf, alpha, n_terms, note;
-90 % intervals). The five-term fit is always on the OADEV.
-
-``prior`` (with ``bayes`` only): a datasheet prior (:mod:`fogbayes.inference.datasheet`:
-a ``DatasheetPrior``, a ``fogbayes.prior/1`` document or its path); the posterior uses a
-log-normal prior on each term the sheet gives, and the document records it under
-``fit.prior`` (values, units, looseness, the sheet's own numbers, source).
+``fit_recording``: the rate in deg/h on a uniform grid (gaps NaN), the OADEV with Greenhall EDF
+and 90 % intervals (:func:`fogbayes.stats.allan.allan_deviation`), the noise fit on octave taus
+(GLS :func:`fogbayes.allan.fit.fit_wls`, or :mod:`fogbayes.allan.bayes` with ``bayes=True``;
+short taus dropped by :func:`fogbayes.allan.fit.fit_range`), paper 002's fit and IEEE 952
+readouts. Options: ``taus``, ``per_decade``, ``select``, sampler sizes, ``kind`` /
+``bias_corrected`` (a second deviation under ``deviation``), ``prior``
+(:mod:`fogbayes.inference.datasheet`, recorded under ``fit.prior``). ``compensate_recording`` refuses.
 """
 
 from __future__ import annotations
