@@ -1,36 +1,12 @@
-r"""Pooled five-term Allan noise of several runs or units: population, spread, outliers.
+"""Pooled five-term Allan noise of several runs or units: population, spread, outliers.
 
-Each recording is one unit: its octave AVAR estimates are fitted by GLS in log space
-(:func:`fogbayes.allan.fit.fit_range`, all five terms, the sensor-filtered
-shortest taus left out as ``fogbayes allan`` does), which gives :math:`y_u = \log\hat\theta_u`
-and its covariance :math:`\Sigma_u` (Gauss-Newton, widened by the dispersion when the
-goodness of fit fails). The pooled terms (default N, B, K; Q and R on request) are then
-modelled as a population (:mod:`fogbayes.pool.normal`): log N, log B, log K of the units
-are normal about a population mean with a between-unit spread. The resolved unpooled terms
-are marginalised (the sub-block of :math:`\Sigma_u`); every unresolved term, pooled or not,
-is conditioned on (:func:`resolved_covariance`). A pooled term the unit does not resolve
-enters with its GLS likelihood normal in its variance coefficient, jointly with the unit's
-other unresolved pooled terms (:func:`censored_covariance`). The pool runs twice: the second time
-each unit's covariance is taken at the first pool's population median instead of at the
-unit's own estimate (:func:`at_population`: at its own estimate a unit's weight follows its
-error, and the population median leaned high).
-
-What it reports, per pooled term (90 % intervals), when the population resolves it
-(:func:`absence_chi2`: the units' records together exclude the term being 0 in all of them
-at the single-unit fit's level, chi-square 2.71):
-
-* the population median :math:`e^{\mu}` (the typical unit),
-* the between-unit spread :math:`s` (log sd; ``factor`` :math:`e^{s}`),
-* the range of a new unit of this type (90 % of the population, with the uncertainty of
-  :math:`\mu` and :math:`s` included),
-* each unit's own (unpooled) estimate and its pooled (shrunk) estimate,
-* each unit's outlier p-value against the population fitted without it, flagged below
-  ``flag_level``.
-
-A term the population does not resolve is stated as an upper bound only: ``"resolved":
-false`` and ``"median": {"upper": ..., "level": 0.95}``, the 95 % quantile of the population
-median (no value, interval or spread, which would be the prior's); likewise a new unit's
-range and each unit's pooled value where the unit does not resolve it either.
+Per unit, y_u = log theta_u and Sigma_u from :func:`fogbayes.allan.fit.fit_range`; the pooled
+terms (default N, B, K) follow :mod:`fogbayes.pool.normal`. Unresolved terms are conditioned on
+(:func:`resolved_covariance`) or enter by their likelihood in the variance coefficient
+(:func:`censored_covariance`); a second pass takes Sigma_u at the population median
+(:func:`at_population`). Per term (90 %): median e^mu, spread s, a new unit's range, each unit
+unpooled and shrunk, outlier p-values; a term the population does not resolve
+(:func:`absence_chi2`) is an upper bound only (``"resolved": false``).
 """
 
 from __future__ import annotations

@@ -1,94 +1,13 @@
-r"""Hierarchical normal model of per-unit estimates: population, spread, shrunk units, outliers.
+"""Hierarchical normal model of per-unit estimates: population, spread, shrunk units, outliers.
 
-Each unit :math:`u = 1..U` (a sensor, or one run of a sensor) gives an estimate
-:math:`y_u \in \mathbb R^P` of its own parameters :math:`\theta_u` with covariance
-:math:`\Sigma_u` (its single-unit fit; for Allan terms the GLS fit in log space,
-:func:`fogbayes.allan.fit.fit_wls`). The population model is
-
-.. math::
-
-    y_u \mid \theta_u \sim \mathcal N(\theta_u, \Sigma_u), \qquad
-    \theta_u \sim \mathcal N(\mu, S), \quad S = \mathrm{diag}(s_1^2 .. s_P^2),
-
-    \mu_p \sim \mathcal N(\tilde y_p, 10^2), \qquad s_p \sim \mathrm{HalfNormal}(1),
-
-with :math:`\tilde y_p` the median of the units' estimates (the prior only fixes the scale:
-10 in log space is a factor :math:`e^{10}`; a spread of 1 in log space is a factor 2.7
-between units, so HalfNormal(1) admits anything a fleet of one type shows). Where the
-components are log amplitudes (Allan terms) that the units may not resolve,
-``amplitude_scale`` puts the prior on the amplitude instead,
-:math:`e^{\mu_p} \sim \mathrm{HalfCauchy}(0, A_p)` (:func:`amplitude_log_prior`;
-:func:`fogbayes.pool.allan.amplitude_scales`): the normal prior in log space has as much mass
-in each decade far below what the records can see as in the decades they measure, and where
-the likelihood is level there the posterior follows it down. A datasheet
-says where the typical unit lies: with ``mu_prior = (m, sd)`` the prior of :math:`\mu_p` is
-:math:`\mathcal N(m_p, sd_p^2)` instead (:mod:`fogbayes.inference.datasheet`: :math:`m_p`
-the log of the sheet value, :math:`sd_p = \ln L_p / 1.645` for looseness :math:`L_p`). The unit
-parameters integrate out exactly, :math:`y_u \sim \mathcal N(\mu, S + \Sigma_u)`, so NUTS
-samples :math:`(\mu, \log s)` and no funnel between a unit and the spread forms (the
-components a unit does not resolve are sampled too, non-centred: below). Given a draw of
-:math:`(\mu, S)` each unit's parameters are normal,
-
-.. math::
-
-    \theta_u \mid y, \mu, S \sim \mathcal N\big(\mu + S (S + \Sigma_u)^{-1} (y_u - \mu),\;
-        S - S (S + \Sigma_u)^{-1} S\big),
-
-drawn once per posterior draw (the shrunk per-unit posteriors; a censored component's
-draws are the sampler's). A new unit of the
-population is :math:`\mathcal N(\mu, S)` (the population's predictive range).
-
-Outliers: unit :math:`u` is judged against the population fitted *without* it (the same
-sampler with that unit's weight set to 0, all leave-one-out fits in one vmapped call):
-its posterior-predictive p-value is
-
-.. math::
-
-    p_u = \mathrm E_{\mu, S \mid y_{-u}}\Big[\Pr\big(\chi^2_P > (y_u - \mu)^\top
-        (S + \Sigma_u)^{-1} (y_u - \mu)\big)\Big],
-
-uniform for a unit of the population, over its resolved components; each censored
-component (below) is judged one-sided, :math:`\Phi((y_{ut} - \mu_t)/\sqrt{s_t^2 +
-\sigma_{ut}^2})`, and the smallest of these p-values times their number (Bonferroni) is the
-unit's. It is flagged when :math:`p_u` is below the flag level.
-
-With ``outlier_test="each"`` every resolved component is judged on its own instead, two-sided,
-:math:`2\,\Phi(-|y_{ut} - \mu_t| / \sqrt{s_t^2 + \Sigma_{u,tt}})`, and the smallest of
-all the components' p-values times their number is the unit's. It is the more powerful test
-when one term of a unit is off and the others are not (a unit whose rate random walk is
-5x its own, on the fleets of ``benchmarks/bench_pool.py``: detected in 90 of 100 at level
-0.01 against 85 with the joint test, false flags 0.45 % against 0.8 %), the usual way a
-unit of a type fails; the joint test is the more powerful when every component moves a
-little (a shifted thermal curve), and stays the default.
-
-The normal likelihood of :math:`y_u` is the approximation this module makes: the GLS
-estimates of well-resolved Allan terms are close to normal in log space (their 90 %
-intervals cover 85-95 %, benchmarks/RESULTS_allan.md). A term a unit does not resolve (its
-interval reaches 0) is not: the Allan variance is linear in the variance coefficient
-:math:`v = e^{2\theta}` (:math:`v = B^2`, :math:`K^2`, ...), and its GLS likelihood is close
-to normal in :math:`v`, not in :math:`\theta`: as :math:`\theta \to -\infty` it levels off at
-:math:`\exp(-\hat v^2 / 2\sigma_v^2)` of its peak (about the chi-square the unit's fit gains
-by the term), where a log-normal likelihood falls to 0. A unit's *censored* components
-:math:`c` therefore get the likelihood of the same Gauss-Newton approximation made in
-:math:`v`, jointly (at 1 h B and K trade off, correlation about -0.75: the records exclude
-both being 0 more firmly than either),
-
-.. math::
-
-    L_{uc}(\theta_c) = \exp\!\big(-\tfrac12\, x^\top (4\Sigma_{u,cc})^{-1} x\big), \qquad
-    x_t = e^{2(\theta_t - y_{ut})} - 1 = (v_t - \hat v_t) / \hat v_t,
-
-(:func:`unit_log_lik`, :func:`censored_log_lik` for one component; ``cov[u]``'s censored block
-holds :math:`\Sigma_{u,cc}`, a quarter of the covariance of :math:`x`, which is the log-space
-covariance this likelihood has at its peak; :func:`fogbayes.pool.allan.censored_covariance`),
-independent of the unit's resolved components. It has no closed-form integral against
-:math:`\mathcal N(\mu_t, s_t^2)`, so each censored component's parameter is sampled with the
-population, non-centred (:math:`\theta_{ut} = \mu_t + s_t z_{ut}`,
-:math:`z_{ut} \sim \mathcal N(0, 1)`; the resolved components stay integrated out). The
-flat-below likelihood this replaces (:math:`L = 1` below the unit's estimate, each term
-alone: a term at 0 as likely as at its estimate), with a normal prior on :math:`\mu` of sd
-10, let the population median of B and K of four simulated 1 h units run to
-:math:`10^{-10}` (benchmarks/RESULTS_pool.md).
+y_u | theta_u ~ N(theta_u, Sigma_u), theta_u ~ N(mu, diag s^2), mu_p ~ N(median y_p, 10^2),
+s_p ~ HalfNormal(1); or e^{mu_p} ~ HalfCauchy(0, A_p) (:func:`amplitude_log_prior`), or a datasheet
+``mu_prior``. Units integrate out, y_u ~ N(mu, S + Sigma_u); NUTS samples (mu, log s); shrunk
+theta_u ~ N(mu + S(S + Sigma_u)^-1 (y_u - mu), S - S(S + Sigma_u)^-1 S); a new unit N(mu, S).
+Outliers, leave-one-out (vmapped): p_u = E[P(chi2_P > (y_u - mu)'(S + Sigma_u)^-1 (y_u - mu))], or
+per component (``outlier_test="each"``), Bonferroni. Censored components: likelihood
+exp(-x'(4 Sigma_cc)^-1 x / 2), x_t = e^{2(theta_t - y_ut)} - 1 (:func:`unit_log_lik`,
+:func:`censored_log_lik`), sampled non-centred.
 """
 
 from __future__ import annotations

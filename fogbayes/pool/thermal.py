@@ -1,33 +1,11 @@
-r"""Pooled thermal bias laws of several units of one sensor type: population, spread, outliers.
+"""Pooled thermal bias laws of several units of one sensor type: population, spread, outliers.
 
-Each recording is one unit. Its bias law ``b(T) = sum_k a_k (T - T_ref)^k`` (order ``n``,
-default 2, paper 004's) is fitted as the closed loop fits it -- generalised least squares on
-block means under the white + flicker + random-walk noise model chosen by maximum likelihood
-(:func:`fogbayes.diagnose.fitting.fit_terms`) -- which gives the coefficients in the unit's
-own centred, scaled basis. Their covariance is the GLS one under the *restricted* (REML)
-noise hyperparameters (:mod:`fogbayes.diagnose.reml`): ML profiles the design out and
-leaves too little slow noise, and on 24 simulated 1 h units the errors of a0 and a1 were
-1.43 and 1.73 of their ML standard errors (sd of z), 1.05 and 1.12 under REML (a2: 0.75 and
-0.63, conservative). Least squares on 1 s blocks would understate them several-fold. They are mapped to one common
-basis, powers of ``T - T_ref`` (:func:`fogbayes.models.polynomial.rebase_matrix`), so units
-tested over different temperature ranges are comparable: :math:`y_u = a_u`,
-:math:`\Sigma_u = M_u C_u M_u^\top`.
-
-The population model is :mod:`fogbayes.pool.normal` (units' coefficients normal about a
-population mean with a diagonal between-unit spread, unit values integrated out, NUTS on the
-mean and spread, leave-one-out posterior-predictive p-values for outliers), applied in
-standardised coordinates :math:`(y - m) / k` per coefficient, with :math:`m` the units'
-median and :math:`k` the larger of their robust spread (1.4826 MAD) and the median standard
-error: the weak priors of that module (mean N(median, 10^2), spread HalfNormal(1)) are then
-weak on every coefficient's own scale (deg/h, deg/h per deg C, ...). Draws are mapped back.
-
-What it reports per coefficient (90 % intervals): the population mean (the typical unit's
-bias at T_ref, slope, curvature), the between-unit standard deviation, the range of a new
-unit of this type, each unit alone and pooled, and each unit's outlier p-value.
-
-The spread is diagonal in the basis about ``T_ref``: units are assumed to differ
-independently in their bias at T_ref, slope and curvature. Choose ``T_ref`` inside the
-units' common temperature range (the default, 20 deg C, is a room-temperature reference).
+Per unit b(T) = sum_k a_k (T - T_ref)^k by GLS (:func:`fogbayes.diagnose.fitting.fit_terms`),
+covariance under REML noise (:mod:`fogbayes.diagnose.reml`), rebased to powers of T - T_ref
+(:func:`fogbayes.models.polynomial.rebase_matrix`): y_u = a_u, Sigma_u = M_u C_u M_u'. Population:
+:mod:`fogbayes.pool.normal` on (y - median) / k per coefficient. Reports (90 %) population mean,
+between-unit sd, a new unit's range, each unit alone and pooled, outlier p-values; the spread
+is diagonal about ``T_ref`` (default 20 deg C).
 """
 
 from __future__ import annotations
