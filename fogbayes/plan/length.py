@@ -1,52 +1,11 @@
-r"""How long a static record must be to know one noise term to a given relative precision.
+"""How long a static record must be to know one noise term to a given relative precision.
 
-The Allan noise fit (:func:`fogbayes.allan.fit.fit_wls`) works on the overlapping
-AVAR at octave cluster sizes. A record of ``n`` samples at ``fs`` Hz gives the cluster sizes
-:math:`m_k = 2^k` with :math:`\tau_k = m_k / f_s \ge \tau_{min}` (the shortest tau the fit
-keeps; 1/fs unless the pilot's fit left octaves out) and :math:`m_k \le \lfloor (n+1)/4
-\rfloor` (Stable32's stop ratio, :func:`fogbayes.stats.taus.cluster_sizes`), each averaging
-:math:`M_k = n + 1 - 2 m_k` terms. At log-parameters :math:`\theta = \log p` (p the terms
-of the model, canonical units of :mod:`fogbayes.allan.model`) the log estimates
-:math:`y_k = \log\hat\sigma^2(\tau_k)` have, as in the fit,
-
-.. math::
-
-    E\,y_k = \log\sigma^2(\tau_k;\theta) + \psi(\nu_k/2) - \log(\nu_k/2), \qquad
-    \mathrm{Cov}\,y = V = D^{1/2} C D^{1/2}, \quad D = \mathrm{diag}\,\psi'(\nu_k/2),
-
-with the EDF :math:`\nu` and correlation :math:`C` from the exact covariance of the estimates
-(:func:`fogbayes.allan.data.model_moments`, :mod:`fogbayes.stats.allan_cov`). With
-
-.. math::
-
-    J_{ki} = \frac{\partial \log\sigma^2(\tau_k)}{\partial\theta_i}
-           = \frac{2 a_i p_i^2 \tau_k^{n_i}}{\sigma^2(\tau_k)}, \qquad
-    I(n) = J^\top V^{-1} J + s_0^{-2}\,\mathbf 1, \qquad
-    se_i(n) = \sqrt{(I(n)^{-1})_{ii}}
-
-(:math:`s_0 = 10` the fit's weak penalty) the standard error of :math:`\log p_i` is exactly
-the one the GLS fit reports on a record of that length whose estimate is :math:`\theta`, so
-at the pilot's own length it reproduces the pilot's. The relative half-width of the
-interval :math:`[e^{\theta_i - z\,se_i}, e^{\theta_i + z\,se_i}]`, :math:`z =
-\Phi^{-1}((1 + \mathrm{level})/2)`, is
-
-.. math::
-
-    h_i(n) = \frac{\mathrm{high} - \mathrm{low}}{2\,\mathrm{value}} = \sinh(z\,se_i(n)),
-
-and :func:`plan_length` returns the shortest ``n`` with :math:`h_i(n) \le` ``precision``
-(i.e. :math:`se_i(n) \le \mathrm{asinh}(\mathrm{precision}) / z`). The search runs on the
-grid :math:`n_j + 1 = (n_{lo} + 1)\,2^{j/128}` (0.54 % steps; :math:`n_{lo}` the shortest
-record with enough octaves, so that :math:`j = 0, 128, 256, \dots` are the lengths at which
-a new octave appears): :math:`j` is raised by 128 until the target is met, then bisected.
-The grid is shared by every plan at the same ``fs``, so the covariance tensors of its
-lengths are computed once. :math:`h(n)` falls with ``n`` in steps: the longest tau carries
-most of the information on K and R, so the answer is often the length at which one more
-octave appears.
-
-Assumptions: the model's terms are the noise (no unmodelled term appears at long tau), the
-record has no gaps, and the fit's GLS covariance is right (85-95 % coverage measured in
-``benchmarks/RESULTS_allan.md``); the check by simulation is ``benchmarks/RESULTS_plan.md``.
+Octave m_k = 2^k with tau_k >= tau_min and m_k <= (n + 1) // 4; y_k = log s2hat(tau_k),
+Cov y = V = D^(1/2) C D^(1/2), D = diag psi'(nu_k/2) (:func:`fogbayes.allan.data.model_moments`).
+J_ki = 2 a_i p_i^2 tau_k^(n_i) / s2(tau_k), I(n) = J'V^-1 J + s_0^-2, se_i = sqrt((I^-1)_ii): the
+GLS fit's standard error (:func:`fogbayes.allan.fit.fit_wls`). :func:`plan_length`: the shortest n
+with sinh(z se_i(n)) <= ``precision``, on the grid n + 1 = (n_lo + 1) 2^(j/128). Assumes the model
+is the noise and no gaps (check: benchmarks/RESULTS_plan.md).
 """
 
 from __future__ import annotations

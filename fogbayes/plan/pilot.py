@@ -1,34 +1,11 @@
-r"""Plan a static record's length from a short pilot recording.
+"""Plan a static record's length from a short pilot recording.
 
-1. The pilot's octave AVAR (:func:`fogbayes.allan.data.prepare`) is fitted by GLS
-   (:func:`fogbayes.allan.fit.fit_range`: the shortest octaves are left out while
-   the fit fails its goodness of fit, as ``fogbayes allan`` does).
-2. The model is the terms the pilot resolves: starting from Q, N, B, K, R, while some term's
-   90 % interval reaches 0 (profile likelihood: dropping it raises the GLS chi-square by less
-   than 2.71), R if it is one of them (on a short pilot the last octaves cannot tell its
-   slope +1 from K's +1/2: the two trade off and neither is resolved) and otherwise the one
-   whose removal costs least is dropped, and the fit repeated. A term that is still
-   unresolved after that cannot be planned for (:class:`~fogbayes.plan.length.PlanError`);
-   ``terms`` (``fogbayes plan --terms``) leaves terms out from the start.
-3. The point plan is :func:`fogbayes.plan.length.plan_length` at the pilot's estimate
-   :math:`\hat p` with the pilot's model and shortest tau.
-4. The pilot knows :math:`p` only to within its covariance, and the planned length depends
-   on it (a K read low, or a B read high, needs a longer record). The range reported is
-   the shortest and the longest plan over the pilot's 90 % region of the log values, jointly
-   (:mod:`fogbayes.plan.spread`: it follows the correlation of the estimates). For reading,
-   ``ends`` also gives the plan with each term in turn at the low and at the high end of its
-   pilot 90 % interval, the others at :math:`\hat p` (one term at a time). A range end or
-   an ``ends`` plan that needs more than ``max_days`` is reported as unreachable
-   (infinite), not refused; only the point plan is.
-5. A term the pilot does not resolve is not shown to be absent, and at the longer taus of
-   the planned record it may matter (a K too weak to see in 1 h competes with B at 3 h:
-   without it, plans for B from such pilots came out ~40 % short, benchmarks/
-   RESULTS_plan.md). The long end of the range is therefore also computed with each
-   unresolved term other than R (and the target) added at the 90 % upper bound of a fit
-   that includes it, and the longer of the two is reported (``range.assumed``). R is
-   not: its upper bound from a short pilot is the fit's cap (a ramp far larger than the
-   pilot's drift), which would make every K plan unreachable; a ramp shows as drift in
-   the raw record and is removed, or left in with ``terms``.
+GLS fit of the pilot (:func:`fogbayes.allan.fit.fit_range`); terms whose 90 % interval reaches 0
+are dropped (R first; unplannable: :class:`~fogbayes.plan.length.PlanError`; ``terms`` limits
+them). Point plan :func:`fogbayes.plan.length.plan_length` at the estimate; range over the
+pilot's 90 % region (:mod:`fogbayes.plan.spread`), its long end also with each unresolved term
+but R at its 90 % upper bound (``range.assumed``); ``ends`` one term at a time. Beyond
+``max_days`` a range end is infinite.
 """
 
 from __future__ import annotations

@@ -1,31 +1,9 @@
 """Which chamber programme lets the loop tell two thermal effects apart.
 
-The loop ranks two supported candidates by a bootstrap duel (:mod:`fogbayes.diagnose.compete`):
-D = max_a 2 logL(base + a) - max_b 2 logL(base + b) over each candidate's grid of searched
-values, and the rival B is rejected when D is above what B itself would give. Whether that
-can happen is a property of the chamber programme and the noise, not of the data: in the
-whitened GLS space of the base model (noise fixed, base terms projected out) the block means
-are z = mu + e, e ~ N(0, I), and with unit directions u_c of each residualised column
-
-    D(z) = max_{a in A} (u_a' z)^2 - max_{b in B} (u_b' z)^2.
-
-Under "A is the effect" with coefficient beta, mu = beta x_A / sigma. The duel's null for B
-is z* = (u_b' z) u_b + e* at B's best member b; B is rejected when P(D(z*) >= D(z)) < alpha.
-Both only involve the projections of z on the span of the columns (a few dozen dimensions),
-so the rejection rate -- the **power** -- is a cheap Monte Carlo. The **noncentrality**
-
-    lambda = min_{b in B} || (I - P_b) mu ||^2
-
-(how far the true effect lies from the closest member of the rival family) orders the
-programmes without Monte Carlo noise. A rival that *contains* the truth -- the lag family
-contains the gradient where channel 2 is channel 1 lagged again (lag at tau = tau_2,
-:mod:`fogbayes.diagnose.candidates`) -- can never be rejected: the loop then keeps the
-simpler one by its rule, so the pairs planned here are those whose truth is the richer model.
-
-A programme is a list of Soak/Ramp segments (:mod:`fogbayes.simulate.profiles`); the sensor
-channels follow the chamber through first-order lags (``lags``, s), as in the simulator. The
-candidates searched are cycles between ``low`` and ``high`` at one ramp rate with one soak
-length, filling the record, beside the generic test the simulator uses (the "before").
+In the whitened GLS space of the base model, z = mu + e, D(z) = max_a (u_a'z)^2 - max_b (u_b'z)^2
+(the duel of :mod:`fogbayes.diagnose.compete`); power = P(B rejected | A) by Monte Carlo on the
+span of the columns; noncentrality lambda = min_b ||(I - P_b) mu||^2 ranks programmes. Programmes
+are Soak/Ramp cycles (:mod:`fogbayes.simulate.profiles`) seen through first-order ``lags``.
 """
 
 from __future__ import annotations

@@ -1,28 +1,9 @@
-r"""The range of planned lengths that uncertain noise values allow.
+"""The range of planned lengths that uncertain noise values allow.
 
-A plan :math:`n^*(\theta)` (:func:`fogbayes.plan.length.plan_length`) depends on the noise
-values :math:`\theta = \log p`, which a pilot knows only to within its covariance
-:math:`\Sigma` (the GLS fit's :math:`(J^\top V^{-1} J)^{-1}`). The range reported is the
-projection of the pilot's 90 % region through the plan,
-
-.. math::
-
-    [\min_{\theta \in E} n^*(\theta),\ \max_{\theta \in E} n^*(\theta)], \qquad
-    E = \{\theta : (\theta - \hat\theta)^\top \Sigma^{-1} (\theta - \hat\theta) \le z^2\},
-    \quad z = 1.645,
-
-which, were :math:`n^*` linear in :math:`\theta`, is the delta-method 90 % interval
-:math:`n^*(\hat\theta) \pm z\,(\nabla n^{*\top} \Sigma \nabla n^*)^{1/2}`; unlike one term at
-a time, it follows the correlation of the estimates (a pilot that reads K low tends to read
-B high, and both lengthen the plan). Because :math:`se(\theta, n)` falls with ``n`` for every
-:math:`\theta`, :math:`\max_E n^*(\theta)` is the shortest ``n`` with
-:math:`\max_{\theta \in E} se(\theta, n) \le` target, and likewise for the minimum: the
-search of :func:`~fogbayes.plan.length.search_length` runs on the extreme se over ``E``,
-found at each ``n`` by the fixed-point iteration :math:`\theta \leftarrow \hat\theta \pm z\,
-\Sigma g / (g^\top \Sigma g)^{1/2}`, :math:`g = \nabla_\theta \log se(\theta, n)` (forward
-differences), which is exact for a linear :math:`\log se` and converges in 2-4 steps here
-(:math:`se(\theta, n)` is smooth in :math:`\theta` at fixed ``n``, whereas :math:`n^*`
-jumps where octaves appear).
+[min, max] of n*(theta) over E = {(theta - theta_hat)' Sigma^-1 (theta - theta_hat) <= z^2},
+z = 1.645 (the pilot's 90 % region, Sigma its GLS covariance). Since se falls with n, the max is
+the shortest n with max_E se(theta, n) <= target (:func:`~fogbayes.plan.length.search_length`),
+found by theta <- theta_hat +- z Sigma g / sqrt(g'Sigma g), g = grad log se.
 """
 
 from __future__ import annotations
