@@ -30,6 +30,9 @@ def _read_json(path: Path, what: str) -> dict:
     if not isinstance(doc, dict):
         raise FileFormatError(f"the {what} JSON is a {type(doc).__name__}, not an object with "
                               "fields", file=str(path), fix=fix)
+    from ..data.doc_kinds import refuse_other_kind
+
+    refuse_other_kind(doc, str(path), (f"{what} document", {what}, fix), error=FileFormatError)
     return doc
 
 

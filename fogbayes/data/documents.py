@@ -46,6 +46,7 @@ from typing import Any
 
 from ..errors import UnitError
 from .axes_doc import AXES_KEYS, AXES_SCHEMA, is_axes_document
+from .doc_kinds import CALIBRATION, FIT, refuse_other_kind
 from .doc_models import _allan, _arma, _check_schema, _scan, check_basis
 from .doc_rules import (
     COMPENSATING,
@@ -122,6 +123,7 @@ def read_calibration(path: str | Path) -> dict:
     (their ``calibration`` must be applicable); anything else as a fit document.
     """
     doc = _load(path)
+    refuse_other_kind(doc, str(path), CALIBRATION)  # a summary, plan, prior...: say so
     if is_loop_document(doc):  # the validator (and the loop package) only when needed
         return _resolve(LOOP_CHECK)(doc, str(path))
     if is_axes_document(doc):  # one fit document per axis (fogbayes allan --axis all)
@@ -174,6 +176,7 @@ def validate_fit_document(doc: Any, source: str | None = None) -> dict:
                      "document", fix="pass the document of 'fogbayes fit --json' here (a loop "
                                      "document goes to 'compensate --params' and "
                                      "'report --loop')")
+    refuse_other_kind(doc, source, FIT)
     _check_schema(doc, v)
     _scan(doc, v)
     model = v.get(doc, "model", str)

@@ -143,8 +143,10 @@ def prior_from_doc(doc, *, source: str = "given") -> NoisePrior:
     """The prior in a parsed document: an Allan document (K's interval caps the walk, its
     ADEV's upper band the Markov component), a datasheet prior (K x looseness caps the walk)
     or a bare ``{"K": value}`` (the walk only)."""
+    from ..data.doc_kinds import refuse_other_kind
     from ..inference.datasheet import is_prior_document
 
+    refuse_other_kind(doc, source, ("noise prior", {"allan", "prior"}, HOW), error=FogbayesError)
     if is_prior_document(doc):
         return _from_datasheet(doc, source)
     if isinstance(doc, dict) and "K" in doc and not isinstance(doc["K"], dict):

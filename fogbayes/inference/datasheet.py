@@ -261,6 +261,9 @@ def validate_prior(doc, source: str = "given") -> DatasheetPrior:
     and positive, a looseness <= 1."""
     if not isinstance(doc, dict):
         raise PriorError("a prior document is a JSON object", file=source, fix=HOW)
+    from ..data.doc_kinds import refuse_other_kind
+
+    refuse_other_kind(doc, source, ("datasheet prior document", {"prior"}, HOW), error=PriorError)
     schema = doc.get("schema")
     if not is_prior_document(doc):
         raise PriorError(f"schema {schema!r} is not {SCHEMA!r}", file=source, column="schema",
