@@ -1,14 +1,8 @@
-"""Preprocessing: pure functions on Recordings and arrays (NumPy).
+"""Preprocessing: pure functions on Recordings and arrays (NumPy); outliers are flagged, never deleted.
 
-* outliers      :func:`pauta_flags` (iterated 3-sigma, paper 004), :func:`hampel_flags`,
-                :func:`mad_flags`, :func:`flag_outliers` -> :class:`OutlierFlags` (flags only,
-                nothing is ever deleted)
-* blocks        :func:`block_average` (any window, cut at gaps, time stamps = block means)
-* paper004      :func:`paper004_smoothing` (rate 1 s, temperature 10 s on the 1 s grid)
-* temperature   :func:`temperature_rate` (deg C/s; "difference" as paper 004 or "savgol")
-* segments      :func:`segment_thermal` (soaks and ramps), :func:`segment_rate_table`
-                (plateaus (T_i, Omega_j))
-* detrend       :func:`detrend` (polynomial on a centred, scaled time basis)
+Outliers :func:`pauta_flags`, :func:`hampel_flags`, :func:`mad_flags`, :func:`flag_outliers`;
+blocks :func:`block_average`; :func:`paper004_smoothing`; :func:`temperature_rate` (deg C/s);
+:func:`segment_thermal`, :func:`segment_rate_table`; :func:`detrend`.
 """
 
 from .blocks import BlockAverage, BlockedRecording, BlockIndex, block_average, block_index

@@ -1,26 +1,9 @@
 """Block averaging over a time window, cut at gaps.
 
-Blocks are laid on a time grid that restarts at the first sample of every run between
-gaps (a gap is a step longer than ``gap_factor`` x the median step), so a block never
-straddles a gap. Sample ``i`` of the run starting at ``t0`` is in block
-
-.. math::
-
-    k_i = \\lfloor (t_i - t_0 + \\epsilon) / W \\rfloor, \\qquad
-    \\epsilon = \\max(10^{-3}\\,\\Delta t,\\ 16\\,\\mathrm{ulp}(t))
-
-(``epsilon`` keeps a sample stamped ``t_0 + k W`` up to rounding in block ``k``). The
-block value is the mean of its samples and its time stamp the mean of their time stamps,
-so the stamp sits where the average is valid even with jitter or a short block::
-
-    time_b = mean(t_i, i in b),  mean_b = mean(x_i, i in b),  count_b = |b|.
-
-A block is *complete* when its run covers its whole window: ``t0 + (k+1) W <= t_last + dt``
-(each sample stands for one median step ``dt``). The incomplete block at the end of each
-run is dropped with ``partial="drop"`` (the default: every value then averages the same
-span) or kept with ``partial="keep"``. Both grids of two windows start at the same
-samples, so a 10 s block is the union of ten 1 s blocks (``paper004_smoothing`` builds it
-as ``k // 10`` of the 1 s grid, so that holds exactly despite rounding).
+Per run between gaps (step > ``gap_factor`` median steps): k_i = floor((t_i - t_0 + eps) / W),
+eps = max(1e-3 dt, 16 ulp(t)); block value and time stamp are the means of its samples.
+Complete when t_0 + (k+1) W <= t_last + dt; ``partial="drop"`` (default) drops each run's
+incomplete last block, ``"keep"`` keeps it. Grids of two windows start at the same samples.
 """
 
 from __future__ import annotations

@@ -1,18 +1,7 @@
 """Polynomial detrending on a centred and scaled time basis.
 
-The trend is a polynomial of order ``p`` in the scaled time
-
-.. math::
-
-    u = (t - t_\\mathrm{ref}) / t_\\mathrm{scale}, \\quad
-    t_\\mathrm{ref} = (t_\\min + t_\\max)/2, \\quad t_\\mathrm{scale} = (t_\\max - t_\\min)/2,
-
-so that ``u`` lies in [-1, 1] whatever the time origin (a record that starts at
-t = 1.7e9 s, a Unix time, fits as well as one that starts at 0). It is solved by least
-squares on a Legendre basis in ``u`` (orthogonal on [-1, 1], hence well conditioned up to
-high orders), and reported as monomial coefficients in ``u``::
-
-    trend(t) = sum_k coef[k] * u**k,     residual = x - trend.
+u = (t - t_ref) / t_scale in [-1, 1] (t_ref, t_scale the mid-point and half-span); least
+squares on a Legendre basis, reported as monomials: trend(t) = sum_k coef[k] u^k, residual = x - trend.
 """
 
 from __future__ import annotations

@@ -1,18 +1,9 @@
 """Outlier flags: the iterated 3-sigma (Pauta) rule of paper 004, Hampel and global MAD.
 
-Outliers are flagged and counted, never deleted: every function returns a boolean mask
-as long as its input, and callers decide what to leave out of a fit or a block mean.
-
-Pauta (paper 004, section 2.2; steps 1-4): on residuals ``v_i = x_i - mean(x)``, with
-``s`` the sample standard deviation (n - 1), flag ``|v_i| > 3 s``; recompute the mean and
-``s`` on the samples not yet flagged and repeat until no new sample is flagged.
-
-On clean Gaussian data one pass flags the two-sided 3-sigma rate 2 (1 - Phi(3)) = 0.27 %.
-Iterating shrinks ``s`` (the flagged tails are gone), so the rule converges to the fixed
-point ``c = 3 sd(Z | |Z| < c)``, c ~= 2.95, i.e. ~0.32 % flagged; ``max_iter=1`` gives the
-one-pass rule. A thermal trend inflates ``s`` and hides spikes: remove it first with
-``detrend_order`` (polynomial in time, refitted on the unflagged samples each pass) or
-``smooth_window`` (running median), or use the robust Hampel filter.
+Flags only (a boolean mask as long as the input). Pauta (paper 004 sec. 2.2): flag
+|x_i - mean| > 3 s (s with n - 1) and repeat on the unflagged samples until nothing new
+(converges to c ~ 2.95, ~0.32 % of Gaussian data; ``max_iter=1`` one pass). Trends: remove
+with ``detrend_order`` or ``smooth_window``, or use Hampel.
 """
 
 from __future__ import annotations

@@ -1,23 +1,9 @@
 """Paper 004's smoothing: rate averaged over 1 s, temperature over 10 s, on one 1 s grid.
 
-Paper 004 (section 2.2): "the 200 Hz gyro output is smoothed over 1 s, i.e. the mean of
-the output within 1 s; temperature changes slowly and is smoothed over 10 s; the
-temperature rate is the difference of adjacent smoothed temperatures".
-
-Here (all blocks cut at gaps, see :mod:`.blocks`):
-
-* output and input rate: means over complete 1 s blocks (flagged samples left out with
-  ``mask``); time stamp = mean time of the samples averaged;
-* temperatures: means over 10 s blocks of the same grid (each 10 s block is exactly ten
-  1 s blocks because both grids start at the first sample of each run; the incomplete last
-  10 s block of a run is kept, it just averages fewer seconds). All samples are used:
-  outlier flags concern the gyro output, not the thermometers;
-* alignment onto the 1 s grid: ``align="hold"`` (default, the paper's reading) gives each
-  1 s row the mean of the 10 s block that contains it, and the temperature rate the
-  backward difference of that 10 s block and the previous one (forward difference in the
-  first block of a run); ``align="interp"`` interpolates the 10 s means linearly to the
-  1 s time stamps and places each difference at the midpoint of its two 10 s blocks
-  (no half-block lag; constant beyond the ends of a run).
+Rates: means over complete 1 s blocks (``mask`` leaves flagged samples out); temperatures:
+10 s blocks of the same grid (:mod:`.blocks`), all samples. ``align="hold"`` (default): each 1 s
+row gets its 10 s block's mean and the backward difference of 10 s means; ``"interp"``:
+linear interpolation, differences at block-pair midpoints.
 """
 
 from __future__ import annotations

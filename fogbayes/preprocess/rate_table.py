@@ -1,21 +1,10 @@
 """Plateaus (T_i, Omega_j) of a rate-table run, for paper 000's temperature x rate grid.
 
-Detection: a sample is on a plateau when
-
-* the input rate is steady: its range over ``stable_s`` around the sample (at least 5
-  samples) is <= ``rate_tolerance``, and
-* the temperature is steady: the |smoothed temperature rate| (Savitzky-Golay slope over
-  ``smooth_s``) is <= ``rate_threshold`` (skipped without a temperature).
-
-Runs of such samples are cut at gaps and at rate steps (a step makes the range large
-around it); the first ``trim_s`` of each run is dropped (table settling), runs shorter than
-``min_duration`` or whose input rate spans more than ``2 rate_tolerance`` (a slow sweep, not a
-plateau) are discarded. Cell temperatures are then grouped into levels T_i (sorted; a new
-level where consecutive cell means differ by more than ``temperature_tolerance``) and rates
-into levels Omega_j (``rate_tolerance``); each cell gets its (i, j).
-
-With ``schedule=[(t_start, t_stop, T, Omega), ...]`` the cells are the samples with
-``t_start + trim_s <= t < t_stop`` and carry the nominal T and Omega.
+On a plateau: input-rate range over ``stable_s`` <= ``rate_tolerance`` and |Savitzky-Golay dT/dt|
+<= ``rate_threshold``. Runs are cut at gaps and steps, trimmed by ``trim_s``, dropped if shorter
+than ``min_duration`` or spanning > 2 ``rate_tolerance``; cells are grouped into levels by
+``temperature_tolerance`` and ``rate_tolerance``. ``schedule=[(t_start, t_stop, T, Omega), ...]``
+gives the cells directly.
 """
 
 from __future__ import annotations

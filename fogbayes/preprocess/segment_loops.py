@@ -1,18 +1,10 @@
 """Compiled loops of the soak/ramp segmenter (Numba): run merging and per-segment statistics.
 
-:func:`merge_runs` labels each sample by its smoothed rate (1 above ``threshold``, -1
-below ``-threshold``, else 0) and applies the merge rule of :mod:`.segments` to each row of
-a (sensors, n) rate array, sensors on all cores for a fleet (:func:`fogbayes.support.numba_cache.over_rows`,
-from 8 rows: below that a thread team's start would cost more than a row's work)::
-
-    duration(run) = end[last sample] - t[first sample]     (end[i] = t[i + 1], last + median step)
-    while there are 2+ runs and the shortest (first of equals) is shorter than min_duration:
-        its label becomes its neighbours' common label, or else the label of the longer
-        neighbour (the left one on a tie, the only one at an end);
-        neighbours that now share a label are joined
-
-:func:`run_stats` gives each segment's mean temperature and least-squares slope
-``sum (t - tbar)(T - Tbar) / sum (t - tbar)^2`` (0 for a single sample).
+:func:`merge_runs` labels samples (+1, -1, 0 by ``threshold``) and merges, shortest first, runs
+shorter than ``min_duration`` (duration = end of last - first time) into the neighbours' common
+label or the longer neighbour's (left on a tie); rows on threads
+(:func:`fogbayes.support.numba_cache.over_rows`). :func:`run_stats`: mean temperature and
+least-squares slope per segment.
 """
 
 from __future__ import annotations

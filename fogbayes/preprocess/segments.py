@@ -1,18 +1,8 @@
 """Segmentation of a thermal test into soaks and ramps.
 
-Each sample is labelled by its smoothed temperature rate ``r`` (Savitzky-Golay slope over
-``smooth_s``, see :mod:`.temperature_rate`; this is what makes it robust to thermometer
-noise and quantisation)::
-
-    soak       |r| <= rate_threshold
-    ramp_up    r > rate_threshold
-    ramp_down  r < -rate_threshold
-
-Runs of equal labels shorter than ``min_duration`` are then merged, shortest first, into
-their neighbours (into the common label when both neighbours agree, else into the longer
-neighbour), so noise and the short transitions at ramp corners do not make segments.
-Boundaries are fuzzy by about ``smooth_s / 2``: the smoothed rate crosses the threshold
-before the corner. Segments are not cut at sampling gaps.
+Labels by the Savitzky-Golay rate r over ``smooth_s`` (:mod:`.temperature_rate`): soak
+|r| <= ``rate_threshold``, ramp_up r > it, ramp_down r < -it; runs shorter than ``min_duration``
+merged shortest first. Boundaries are fuzzy by ~``smooth_s / 2``; not cut at gaps.
 """
 
 from __future__ import annotations

@@ -1,29 +1,10 @@
 """Temperature rate dT/dt (deg C/s) from a smoothed temperature, one value per sample.
 
-``method="difference"`` (paper 004, section 2.2): average the temperature over blocks of
-``window_s`` (cut at gaps, see :mod:`.blocks`; the short last block of a run is kept, its
-mean time stamp makes it exact on a ramp) and difference consecutive block means
-
-.. math::
-
-    \\dot T_{b+1/2} = (\\bar T_{b+1} - \\bar T_b) / (\\bar t_{b+1} - \\bar t_b).
-
-The paper says only "difference of adjacent smoothed temperatures". ``align="interp"``
-places each difference at the midpoint of its two block times and interpolates linearly to
-every sample (no lag; constant beyond the first/last midpoint of a run); ``align="hold"``
-gives every sample of block ``b`` the backward difference ``(b-1, b)`` (the forward one in a
-run's first block), which is causal but lags by about one window. A linear ramp gives its
-exact slope either way.
-
-``method="savgol"``: Savitzky-Golay derivative, i.e. the slope at ``t_i`` of a polynomial
-of order ``polyorder`` fitted by least squares to the ``w`` samples around ``i`` (``w`` =
-``window_s`` in samples, odd; the window is shifted inside the run at its ends, as
-``scipy.signal.savgol_filter(mode="interp")``). Each run between gaps is handled alone. On
-an exact grid this is scipy's filter; with irregular time stamps the fit uses the actual
-times, so a polynomial of order <= ``polyorder`` gives its exact derivative.
-
-A run too short for two blocks ("difference") or one window ("savgol") gets the
-least-squares slope over its samples (0 for a lone sample).
+``"difference"`` (paper 004 sec. 2.2): block means over ``window_s`` (:mod:`.blocks`),
+dT = (T_{b+1} - T_b) / (t_{b+1} - t_b); ``align="interp"`` at midpoints, linearly interpolated,
+``"hold"`` backward difference (causal). ``"savgol"``: slope of an order-``polyorder`` least-squares
+fit to the ``w`` samples around each (actual times; scipy's ``savgol_filter(mode="interp")`` on
+an exact grid), per run. Too-short runs: their least-squares slope.
 """
 
 from __future__ import annotations
