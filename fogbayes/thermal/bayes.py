@@ -1,11 +1,7 @@
 """Posterior part of a thermal fit document: NUTS with AR(p) noise on coarser blocks.
 
-The least-squares fit uses 1 s block means; their noise is strongly correlated (bias
-instability, Markov noise), so its standard errors are too small. The posterior is
-computed on ``bayes_average_s`` (default 10 s) block means, which cuts the cost tenfold
-and loses nothing for a bias that changes over minutes, with AR(1) noise by default (the
-coverage study in tests/test_thermal_bayes.py shows why). Records made of short bursts
-(no complete 10 s block) fall back to the fit blocks, and the document says which was used.
+On ``bayes_average_s`` (default 10 s) block means, AR(1) noise by default; records without a
+complete block fall back to the fit blocks (the document says which).
 """
 
 from __future__ import annotations

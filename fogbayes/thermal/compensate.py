@@ -1,20 +1,9 @@
 """Compensators for bias models, compiled once per model structure.
 
-A bias model (``bias-t``, ``thermal``) is a polynomial basis (static structure,
-:class:`fogbayes.models.polynomial.PolyBasis`) and its coefficients. Compensation removes
-the modelled bias from every sample::
-
-    y_comp[i] = y[i] - X(z_i) @ coef          (y in the unit the coefficients were fitted in)
-
-:func:`bias_compensator` uses ``jit(f)`` and ``jit(vmap(f))`` (a batch of sensors of the
-same model structure), compiled once per term set and shape with the coefficients and the
-basis's centre and scale as arguments, so a fleet of sensors, each with its own
-calibration, or a stream of chunks never compiles again; on a CPU the single-sensor ``f``
-is a compiled loop (:mod:`fogbayes.thermal.compensate_loops`) that reads each input once
-and writes in place. The basis centres and scales the covariates before any power
-is taken, so the compensators also run in float32 (``dtype=np.float32``): temperatures of
-order 1e2 deg C and rates of order 1e4 deg/h keep ~1e-7 relative precision, far below gyro
-noise. The composite (paper 000) compensator lives in :mod:`fogbayes.composite.compensate`.
+y_comp[i] = y[i] - X(z_i) @ coef for a :class:`fogbayes.models.polynomial.PolyBasis`.
+:func:`bias_compensator`: ``jit(f)`` / ``jit(vmap(f))`` with coefficients, centre and scale as
+arguments (on CPU the loop of :mod:`fogbayes.thermal.compensate_loops`); float32 usable since
+covariates are scaled first. Composite: :mod:`fogbayes.composite.compensate`.
 """
 
 from __future__ import annotations

@@ -1,17 +1,8 @@
 """Compiled compensation loops for polynomial bias models (Numba, CPU), one per term set.
 
-For a basis with terms ``e_k`` the loop computes, per sample, what
-:func:`fogbayes.thermal.compensate.bias_compensator`'s XLA program computes, in the same order::
-
-    u_c = (z_c - centre_c) * (1 / scale_c)
-    out = y - sum_k (coef_k * u_1 * ... * u_1 * u_2 * ...)      (e_kc factors u_c, in order)
-
-The term set is static, so its source is generated once (straight-line products, no loops
-over terms or exponents) and compiled once per term set and dtype, samples split over the cores; centre, scale and the
-coefficients are arguments, so every sensor of a fleet and every chunk of a stream share the
-compiled code. Written this way the loop runs at memory speed: it reads ``y`` and ``z`` once
-and writes ``out`` once, in place when ``out`` is given (benchmarks/RESULTS_stream.md, §3),
-where the XLA program returns a new array that the caller then copies.
+Per sample, as :func:`fogbayes.thermal.compensate.bias_compensator`: u_c = (z_c - centre_c) / scale_c,
+out = y - sum_k coef_k prod_c u_c^{e_kc}. Source generated per term set; coefficients, centre and
+scale are arguments; ``out`` may be written in place.
 """
 
 from __future__ import annotations

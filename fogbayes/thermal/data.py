@@ -1,21 +1,9 @@
 """From a Recording to the data a thermal bias fit needs: block means and per-sample covariates.
 
-Two processing modes (``Processing.mode``):
-
-* ``"paper"`` -- exactly paper 004: rate averaged over 1 s, temperature over 10 s (held over
-  the 10 s block), temperature rate = backward difference of consecutive 10 s means
-  (:func:`fogbayes.preprocess.paper004_smoothing`, ``align="hold"``), gross errors removed
-  by the 3-sigma (Pauta) rule on the model residuals.
-* ``"default"`` -- the same 1 s rate blocks and Pauta flags, but the temperature rate is a
-  centred Savitzky-Golay derivative over 60 s and the temperature the 1 s mean. Why: the
-  paper's backward difference lags the true rate by about one 10 s window and differences
-  of 10 s means amplify thermometer quantisation (TMP461: 0.0625 deg C, i.e. 0.375 deg C/min
-  per step over 10 s, comparable to the 0.5 deg C/min ramps); the Shupe drive changes over
-  minutes, so a 60 s centred window loses nothing and is far less noisy. The measured
-  effect on simulated paper-004 runs is in ``benchmarks/RESULTS_thermal.md``.
-
-Compensation uses per-sample covariates from the same estimator (``"paper"``: the held
-10 s difference, causal, as the paper's DSP computes it in real time).
+``"paper"``: paper 004 (1 s rate, 10 s temperature held, backward difference of 10 s means,
+:func:`fogbayes.preprocess.paper004_smoothing`), Pauta on the residuals. ``"default"``: the same
+rate blocks and flags, 1 s temperature, centred 60 s Savitzky-Golay rate
+(benchmarks/RESULTS_thermal.md). Compensation uses the same estimator per sample.
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
-"""What a bias-t / thermal fit document must hold to be applied (the family's own rules).
+"""What a bias-t / thermal fit document must hold to be applied (the family's ``check_document``).
 
-:func:`fogbayes.data.documents.validate_fit_document` checks every document's envelope
-(schema, JSON types and finite numbers, depth, ``input``) and then calls the family's
-``check_document`` (:data:`fogbayes.data.documents.MODEL_CHECKS`): processing options,
-the model specification, the scaled basis against it, coefficients and covariance, the
-validity range inside the range the basis was scaled to.
+Called by :func:`fogbayes.data.documents.validate_fit_document` via
+:data:`fogbayes.data.documents.MODEL_CHECKS`: processing, model, scaled basis, coefficients and
+covariance, validity range inside the scaled range.
 """
 
 from __future__ import annotations

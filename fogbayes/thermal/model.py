@@ -1,27 +1,10 @@
-"""Thermal bias models: ``bias-t`` (paper-style polynomial in T) and ``thermal`` (paper 004).
+"""Thermal bias models: ``bias-t`` (polynomial in T) and ``thermal`` (paper 004, Shupe effect).
 
-Paper 004 (Shupe effect): a changing, non-uniform temperature field in the fibre coil
-gives a non-reciprocal phase, so the bias depends on the temperature T *and* on its rate
-of change dT/dt. Its model (eq. 14, order n = 2) is a polynomial in both::
-
-    B(T, dT/dt) = sum_{i<=n_T} a_i T^i + sum_{1<=j<=n_R} b_j (dT/dt)^j
-                  [+ sum c_ij T^i (dT/dt)^j, i, j >= 1, i + j <= max(n_T, n_R)]   (cross terms)
-                  [+ sum_k sum_{1<=l<=n_E} d_kl E_k^l]                          (extra channels)
-
-``E_k`` are extra temperature channels, or the difference of two channels (outer minus
-inner coil side: the radial temperature gradient that drives the Shupe phase). ``bias-t``
-is the same model with ``n_R = 0``: the cubic-in-T fit that autopilots (PX4, ArduPilot)
-use, with no temperature-rate term.
-
-The polynomial is built in a centred, scaled basis (:mod:`fogbayes.models.polynomial`);
-covariates are ordered ``(T, dT/dt, E_1, ...)``. Temperatures in deg C, temperature rates
-in deg C/min (the unit of chamber ramp settings: paper 004 ramps at 0.5 deg C/min).
-
-Temperature rate (:func:`thermal_covariates`): ``method="paper"`` is paper 004's
-(temperature averaged over ``window_s`` = 10 s blocks, consecutive block means differenced
-and held over the block); ``"difference"`` centres the same differences (no lag);
-``"savgol"`` is a centred Savitzky-Golay smoothing derivative (see
-:mod:`fogbayes.thermal.workflow` for the default and why).
+B = sum_{i<=n_T} a_i T^i + sum_{1<=j<=n_R} b_j (dT/dt)^j [+ c_ij T^i (dT/dt)^j] [+ sum d_kl E_k^l]
+(eq. 14; E_k extra channels or channel differences); ``bias-t`` has n_R = 0. Scaled basis of
+:mod:`fogbayes.models.polynomial`, covariates (T, dT/dt, E_1, ...) in deg C and deg C/min.
+:func:`thermal_covariates` rate: ``"paper"`` (held 10 s differences), ``"difference"``
+(centred), ``"savgol"``.
 """
 
 from __future__ import annotations

@@ -1,20 +1,8 @@
 """Recipe: the PAN satellite ETU gyro (ST LSM6DSM) cold thermal-vacuum test as Recordings.
 
-Data: ``shared/data/measured/pan_lsm6dsm_tvac_cold/TVCtest3_7_20.csv`` (see its SOURCE.md;
-MIT licence). Conversions, as documented there:
-
-* time: ``time (ms)`` / 1000 -> s (50 Hz in 25 bursts of 5 s, one every ~305 s);
-* gyro: ``gyro{x,y,z} rad/s`` x 0.5 (the authors' driver wrote twice the rate) -> rad/s;
-* temperature: the raw word is the LSM6DSM OUT_TEMP register read as uint16:
-  ``T = int16(raw) / 256 + 25`` deg C (23.9 -> 15.6 deg C, monotone cooling). The scale is
-  inferred; the monotone trend is certain, the absolute deg C is not.
-
-What this record can and cannot show: the sensor cools monotonically at a nearly constant
-rate, so temperature, its rate and elapsed time are almost collinear. A bias that follows
-T is indistinguishable from a drift in time (warm-up, ageing) or from a dT/dt effect; a fit
-here calibrates "bias along this cooling run", not a temperature law valid when heating,
-at other rates or in another run. The ~3 spikes in gyro x (file value <= -0.08) are left
-in the file and flagged by the 3-sigma rule, never deleted.
+Data: ``shared/data/measured/pan_lsm6dsm_tvac_cold/TVCtest3_7_20.csv`` (SOURCE.md, MIT).
+time ms / 1000; gyro rad/s x 0.5; T = int16(raw) / 256 + 25 deg C (scale inferred). The run
+cools monotonically, so T, dT/dt and time are almost collinear: a fit is valid along this run only.
 """
 
 from __future__ import annotations

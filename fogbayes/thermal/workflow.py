@@ -1,27 +1,11 @@
 """Workflow for the ``bias-t`` and ``thermal`` models: fit a Recording, compensate one.
 
-``fit_recording`` (paper 004 when ``processing="paper"``):
-
-1. rate in deg/h; covariates per sample (T, dT/dt, extra channels, gradient);
-2. 1 s block means (:mod:`.data`); order chosen when ``orders`` gives a range or
-   ``"auto"``: by paper 000's RMS criterion, or by PSIS-LOO / WAIC under the AR-noise
-   posterior (``order_criterion``);
-3. closed-form least squares in the scaled basis (:func:`fogbayes.inference.lsq.lstsq`);
-4. 3-sigma (Pauta) flags on the per-sample residuals; flagged samples are left out of the
-   block means and the model is fitted again (flags are counted, never deleted);
-5. optional posterior (``bayes=True``): NUTS with AR(p) noise on coarser (10 s) blocks,
-   intervals of the coefficients, WAIC/LOO, convergence;
-6. bias B0 and stability Bs (1, 10, 100 s) before/after, full-temperature and per
-   soak/ramp segment.
-
-The fit document (JSON-able dict) holds everything ``compensate_recording`` needs. Orders
-(``orders``): ``bias-t``: ``"3"`` or a range ``"1-4"`` / ``"auto"`` (= 1-4); ``thermal``:
-``"2"`` (both 2), ``"2,1"`` (T order, dT/dt order), ranges ``"1-3,1-2"`` or ``"auto"``.
-
-Compensation subtracts the modelled bias sample by sample (jitted compensator of
-:mod:`fogbayes.thermal.compensate`), with covariates clamped to the range seen in the fit (outside
-it a polynomial extrapolates wildly; PX4 clamps the same way), and flags 3-sigma outliers
-of the compensated output.
+``fit_recording``: covariates, 1 s block means (:mod:`.data`), orders (RMS criterion or
+PSIS-LOO/WAIC, ``order_criterion``), least squares (:func:`fogbayes.inference.lsq.lstsq`), Pauta
+flags and refit, optional NUTS (``bayes=True``), B0 and Bs before/after. ``orders``: bias-t
+``"3"``, ``"1-4"``, ``"auto"``; thermal ``"2"``, ``"2,1"``, ``"1-3,1-2"``, ``"auto"``
+(:data:`DEFAULT_ORDERS`). Compensation (:mod:`fogbayes.thermal.compensate`) clamps covariates to
+the fitted range and flags 3-sigma outliers.
 """
 
 from __future__ import annotations
