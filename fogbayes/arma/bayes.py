@@ -1,26 +1,9 @@
-"""Bayesian ARMA(p, q): NumPyro NUTS posterior and WAIC/LOO order comparison (ArviZ 0.23).
+"""Bayesian ARMA(p, q): NumPyro NUTS posterior and WAIC/LOO order comparison (ArviZ).
 
-Model (paper sign convention, zero-mean series x)::
-
-    r_phi_i, r_theta_j ~ Uniform(-1, 1)        partial autocorrelations (Jones 1987:
-                                                 uniform over the stationary/invertible region
-                                                 in PACF coordinates)
-    phi = pacf_to_ar(r_phi), theta = pacf_to_ar(r_theta)
-    sigma ~ HalfNormal(2 sd(x))                 weakly informative, on the data's scale
-    x ~ exact ARMA likelihood (fogbayes.arma.model.arma_loglik)
-
-Pointwise log-likelihood for WAIC/LOO: the exact likelihood factorises into one-step
-predictive densities, log p(x) = sum_t log N(x_t; x^_{t|t-1}, sigma2 F~_t) (Kalman
-filter), which are the terms handed to ``az.waic`` / ``az.loo``. For a time series this
-scores one-step-ahead prediction given the past rather than leave-one-out in the i.i.d.
-sense; it ranks orders like the exact likelihood does.
-
-Orders are compared inside one padded shape (P, Q) with 0/1 masks; the masks, the series
-and the prior scale are traced arguments of one cached, jitted sampler (:func:`_sampler`),
-so it compiles once per (warm-up, draws, bucket of n, P, Q, chains) for the whole candidate
-set and for every later call of the same shapes. A series of n samples is held in
-``bucket_length(n)`` samples (:mod:`fogbayes.models.buckets`) with its tail masked out of
-the likelihood and the pointwise terms, so nearby lengths share the sampler too.
+PACF r_phi, r_theta ~ U(-1, 1) (Jones 1987), phi = pacf_to_ar(r_phi), theta = pacf_to_ar(r_theta),
+sigma ~ HalfNormal(2 sd(x)), exact likelihood :func:`fogbayes.arma.model.arma_loglik`. Pointwise:
+log N(x_t; x^_{t|t-1}, sigma2 F_t) (Kalman). One cached sampler (:func:`_sampler`) per padded
+(P, Q) with masks and ``bucket_length(n)`` (:mod:`fogbayes.models.buckets`).
 """
 
 from __future__ import annotations

@@ -1,19 +1,9 @@
-"""One-step prediction, residuals and Kalman denoising of a series with a fitted ARMA model.
+"""One-step prediction, residuals and Kalman denoising with a fitted ARMA model.
 
-One-step prediction (paper 002, Fig. 5): x^_{t|t-1} = E[x_t | x_1..x_{t-1}] from the exact
-Kalman filter; the innovation v_t = x_t - x^_{t|t-1} has variance sigma2 F~_t, and the
-standardised residual a_t = v_t / sqrt(F~_t) (variance sigma2) is white under the model.
-
-Denoising splits the series into a signal and white noise, x_t = s_t + e_t,
-e_t ~ N(0, h), with the canonical decomposition (Hillmer & Tiao 1982): the ARMA spectrum
-S(w) = sigma2 |theta(e^{-iw})|^2 / |phi(e^{-iw})|^2 keeps the largest white part that
-leaves a valid signal spectrum, h = min_w S(w) (or a given h <= that). The signal is
-ARMA(p, m), m = max(p, q), phi(L) s_t = theta_s(L) b_t, from the spectral factorisation
-
-    sigma2_s theta_s(z) theta_s(1/z) = sigma2 theta(z) theta(1/z) - h phi(z) phi(1/z).
-
-A Kalman filter (E[s_t | x_1..x_t]) and an RTS smoother (E[s_t | x_1..x_n]) on
-x_t = s_t + e_t give the filtered/smoothed signal; the removed noise is x - signal.
+Innovations v_t = x_t - x^_{t|t-1} (variance sigma2 F_t), residual a_t = v_t / sqrt(F_t). Denoising
+(Hillmer & Tiao 1982): x = s + e, h = min_w S(w), signal ARMA(p, max(p, q)) from
+sigma2_s theta_s(z) theta_s(1/z) = sigma2 theta(z) theta(1/z) - h phi(z) phi(1/z); Kalman filter
+and RTS smoother.
 """
 
 from __future__ import annotations

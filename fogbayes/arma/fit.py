@@ -1,24 +1,9 @@
-"""ARMA(p, q) estimation: long-autoregression (Hannan-Rissanen) start, exact MLE with optax.
+"""ARMA(p, q) estimation: Hannan-Rissanen start, exact MLE with optax.
 
-Paper 002's "long autoregression" method, in its standard two-stage form (Hannan and
-Rissanen 1982):
-
-1. fit a long AR(m) by least squares, x_t = sum_{i<=m} psi_i x_{t-i} + a_t, and keep its
-   residuals a^_t (they estimate the innovations because theta(L)^{-1} phi(L) ~ psi(L));
-2. regress x_t on x_{t-1..t-p} and a^_{t-1..t-q}:
-   x_t = sum phi_i x_{t-i} - sum theta_j a^_{t-j} + a_t (paper sign, hence theta = -coef).
-
-The exact maximum-likelihood fit starts there and maximises the sigma2-profiled exact
-log-likelihood (:func:`fogbayes.arma.model.arma_profile_loglik`) with optax L-BFGS over
-u = atanh(PACF) (stationary and invertible by construction), stopping when the gradient of
--log L_p / n is below ``tol``. Standard errors come from the Hessian of the profile
-log-likelihood in (phi, theta) and 2 sigma2^2 / n for sigma2.
-
-Everything is a pure function of static (p, q) and an array; ``fit_arma_batch`` is the same
-fit vmapped over many series of equal length in one compiled call. A series of n samples
-is fitted inside an array of ``bucket_length(n)`` (:mod:`fogbayes.models.buckets`), its
-tail masked out of every sum (:func:`fogbayes.models.arma.profile_terms`): records of nearby
-lengths share one compiled program and keep the numbers of the unpadded series.
+Long AR(m) residuals a^_t, then x_t = sum phi_i x_{t-i} - sum theta_j a^_{t-j} + a_t (Hannan &
+Rissanen 1982); exact MLE of :func:`fogbayes.arma.model.arma_profile_loglik` by L-BFGS over
+u = atanh(PACF); standard errors from the profile Hessian, 2 sigma2^2 / n for sigma2.
+``fit_arma_batch`` vmaps; padding to ``bucket_length(n)`` (:func:`fogbayes.models.arma.profile_terms`).
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""ARMA(p, q) noise model of the ARMA family: the exact Gaussian likelihood and the
-stationary/invertible parameterisation (paper 002, eq. 8, its sign convention).
+"""ARMA(p, q) noise model: exact Gaussian likelihood, stationary/invertible parameterisation.
 
-The functions live in :mod:`fogbayes.models.arma` (the derivation is there): the shared
-layer below the families uses them too (:mod:`fogbayes.inference.bayes`'s ARMA noise), and
-imports point one way, so :mod:`fogbayes.inference` never imports a family. The names are
-the same here.
+Re-exports :mod:`fogbayes.models.arma` (paper 002 eq. 8, its sign convention), which the shared
+layer (:mod:`fogbayes.inference`) also uses.
 """
 
 from __future__ import annotations

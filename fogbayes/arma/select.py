@@ -1,20 +1,8 @@
 """ARMA order selection by AIC / BIC over a candidate set, all candidates in one compiled call.
 
-Paper 002 compares AR(1), AR(2), AR(3), ARMA(1,1) and ARMA(2,1) by AIC; we also offer the
-grid p, q <= 3 and BIC:
-
-    AIC = -2 log L + 2 k,        BIC = -2 log L + k log n,        k = p + q + 1 (sigma2)
-
-with log L the exact log-likelihood at the MLE (zero-mean series; k counts no mean, as
-statsmodels' ``trend="n"``). Every candidate is fitted inside the shapes of the largest
-(P, Q) with 0/1 masks on the coefficients (see :func:`fogbayes.arma.fit.fit_arma`),
-so the candidate set costs one compilation (for every length of the same
-:func:`~fogbayes.models.buckets.bucket_length`); many series of equal length are vmapped.
-
-AIC is efficient but not consistent: with a nested larger candidate it over-fits with
-probability ~P(chi2_1 > 2) = 16 % per extra parameter, so it cannot recover a true order
-in >= 90 % of series; BIC can (measured in tests/test_arma_select.py and
-benchmarks/RESULTS_arma.md). ``criterion="bic"`` is therefore the default.
+AIC = -2 log L + 2k, BIC = -2 log L + k log n, k = p + q + 1 (zero-mean). Candidates share the
+largest (P, Q) shapes with masks (:func:`fogbayes.arma.fit.fit_arma`,
+:func:`~fogbayes.models.buckets.bucket_length`). Default ``criterion="bic"`` (consistent).
 """
 
 from __future__ import annotations

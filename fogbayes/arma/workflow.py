@@ -1,14 +1,8 @@
-"""ARMA drift analysis of a recording (paper 002, section 2): the order of the stages.
+"""ARMA drift analysis of a recording (paper 002, section 2).
 
-decimate (block means of K samples) -> detrend (polynomial in centred/scaled time, then
-zero mean) -> ACF/PACF -> fit every candidate order (exact MLE) -> select by AIC/BIC ->
-whiteness of the selected model's residuals (paper's rho_a,2, rho_ax,3; Ljung-Box) ->
-one-step prediction and Kalman denoising -> optionally NumPyro posteriors with WAIC/LOO.
-
-:func:`analyse_recording` returns the JSON document plus the arrays figures need;
-:func:`fit_recording` returns the document alone (the workflow contract's shape).
-Parameters are in the recording's output unit; the sign convention is stated in the
-document (paper: x_t = sum phi_i x_{t-i} + a_t - sum theta_j a_{t-j}).
+decimate -> detrend -> ACF/PACF -> fit candidates -> AIC/BIC -> whiteness -> prediction and
+denoising -> optional posteriors. :func:`analyse_recording` returns the document and arrays,
+:func:`fit_recording` the document; paper sign convention x_t = sum phi_i x_{t-i} + a_t - sum theta_j a_{t-j}.
 """
 
 from __future__ import annotations
