@@ -1,10 +1,6 @@
-"""The five Allan-variance noise terms: their names, the canonical units fogbayes documents
-state them in, and the bias-instability factor (IEEE 952 C.1).
+"""The five Allan-variance noise terms: names, canonical units, and the bias-instability factor (IEEE 952 C.1).
 
-Shared vocabulary below :mod:`fogbayes.inference` and the model families: the Allan family's
-model (:mod:`fogbayes.allan.model`, which offers these names and holds the formulas) and the
-datasheet prior (:mod:`fogbayes.inference.datasheet`) both use it, and imports point one way,
-so the inference layer never imports a family.
+Shared by :mod:`fogbayes.allan.model` and :mod:`fogbayes.inference.datasheet`, below both.
 """
 
 from __future__ import annotations

@@ -1,33 +1,11 @@
 """ARMA(p, q) noise model: exact Gaussian likelihood and a stationary/invertible parameterisation.
 
-Paper 002, eq. 8 (its sign convention, used throughout fogbayes)::
-
-    x_t = phi_1 x_{t-1} + ... + phi_p x_{t-p} + a_t - theta_1 a_{t-1} - ... - theta_q a_{t-q},
-    a_t ~ N(0, sigma2) i.i.d.
-
-i.e. phi(L) x_t = theta(L) a_t with phi(z) = 1 - sum phi_i z^i, theta(z) = 1 - sum theta_j z^j.
-statsmodels writes the MA part with a plus sign: ``ma_statsmodels = -theta``.
-
-The exact log-likelihood of a zero-mean stationary series x_1..x_n is
-
-    log L = -1/2 sum_t [ log(2 pi F_t) + v_t^2 / F_t ]
-
-with the innovations v_t and their variances F_t from a Kalman filter started at the
-stationary state covariance (:mod:`fogbayes.models.statespace`). The covariance recursion
-is run with sigma2 = 1 (F_t = sigma2 * F~_t), which also gives sigma2's closed-form
-profile maximiser sigma2_hat = (1/n) sum v_t^2 / F~_t. For pure AR(p) (q = 0) the same
-exact likelihood has a closed form without a scan: the first p values are N(0, Gamma_p),
-the rest are conditionally N(sum phi_i x_{t-i}, sigma2).
-
-Stationarity / invertibility by construction (Barndorff-Nielsen & Schou 1973, Monahan
-1984, Jones 1980): any partial autocorrelations r_k in (-1, 1) give, through the
-Durbin-Levinson recursion, a polynomial 1 - sum phi_i z^i with all roots outside the unit
-circle. :func:`pacf_to_ar` does that map; ``r = tanh(u)`` makes it unconstrained. The same
-map gives an invertible MA polynomial in the paper's sign convention.
-
-Shared model math, below :mod:`fogbayes.inference` and the model families: the ARMA family
-(:mod:`fogbayes.arma`, whose :mod:`~fogbayes.arma.model` offers these names), the composite
-family's ARMA noise and :mod:`fogbayes.inference.bayes` all use it.
+Paper 002 eq. 8: x_t = sum phi_i x_{t-i} + a_t - sum theta_j a_{t-j}, a_t ~ N(0, sigma2)
+(statsmodels' MA = -theta). log L = -1/2 sum_t [log(2 pi F_t) + v_t^2 / F_t] by the Kalman filter
+of :mod:`fogbayes.models.statespace` with sigma2 = 1, so sigma2_hat = (1/n) sum v_t^2 / F~_t; pure
+AR(p) in closed form. :func:`pacf_to_ar` (Durbin-Levinson on r in (-1, 1), r = tanh u; Jones 1980)
+gives stationary AR and invertible MA polynomials. Used by :mod:`fogbayes.arma`, the composite
+family and :mod:`fogbayes.inference.bayes`.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""Array lengths that compiled programs are built for: a series of n samples is held in
-``bucket_length(n)`` samples, its tail masked out, so records of nearby lengths share one
-program instead of compiling their own.
+"""Array lengths compiled programs are built for: n samples are held in ``bucket_length(n)``.
 
-A compiled ARMA fit costs ~5-7 s and ~1 100 memory maps of XLA:CPU code per order, a
-Kalman filter ~2 s, the NUTS sampler of a linear posterior (``inference.bayes``) ~3-6 s;
-the padding costs at most a quarter more work per evaluation.
+The tail is masked out, so records of nearby lengths share one program (at most a quarter
+more work per evaluation).
 """
 
 from __future__ import annotations

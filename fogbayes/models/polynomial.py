@@ -1,29 +1,9 @@
 """Centred and scaled multivariate polynomial bases, and their raw coefficients.
 
-A basis is a set of monomials in ``c`` covariates (temperature, temperature rate, ...),
-each covariate centred and scaled before it is raised to a power::
-
-    z'_c = (z_c - centre_c) / scale_c            (so z' spans about [-1, 1])
-    X[i, k] = prod_c z'_{i,c} ** e_{k,c}         (term k has exponents e_k)
-    f(z) = X(z) @ coef
-
-Fitting in the scaled basis keeps the normal equations well conditioned (the papers' raw
-coefficients span 1e1 ... 1e-12). Raw coefficients, in powers of ``(z - origin)`` for any
-origin (0 for the papers' form, a reference temperature for firmware), are produced only
-for display and export by an exact linear map ``raw = M @ coef`` (binomial expansion of
-each scaled monomial), so that ``cov_raw = M cov M^T`` as well.
-
-The term set must be *downward closed* (with every monomial, all monomials it divides),
-which is what makes the raw form a polynomial in the same terms.
-
-Example:
-    >>> import numpy as np
-    >>> b = make_basis(("T",), ((0,), (1,), (2,)), np.array([[-40.0], [60.0]]))
-    >>> b.centre, b.scale
-    ((10.0,), (50.0,))
-    >>> raw = to_raw(np.array([1.0, 0.0, 1.0]), b)      # 1 + ((T - 10) / 50)^2
-    >>> np.allclose(raw, [1.04, -0.008, 0.0004])
-    True
+z'_c = (z_c - centre_c) / scale_c, X[i, k] = prod_c z'_{i,c}^{e_{k,c}}, f(z) = X(z) @ coef.
+Raw coefficients in powers of (z - origin) by the exact linear map raw = M @ coef (binomial
+expansion; cov_raw = M cov M'), :func:`to_raw`, :func:`rebase_matrix`. Term sets must be
+downward closed.
 """
 
 from __future__ import annotations

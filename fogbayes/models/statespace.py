@@ -1,20 +1,8 @@
-"""State-space form of an ARMA(p, q) process and the Kalman filter / RTS smoother on it.
+"""State-space form of an ARMA(p, q) process and the Kalman filter / RTS smoother on it (pure JAX).
 
-Harvey's form with r = max(p, q + 1) states, paper-002 sign convention
-(x_t = sum_i phi_i x_{t-i} + a_t - sum_j theta_j a_{t-j}, a_t ~ N(0, sigma2))::
-
-    alpha_{t+1} = T alpha_t + R a_{t+1},     T = [[phi_1, 1, 0, ...],
-    s_t         = alpha_t[0]                      [phi_2, 0, 1, ...],
-    y_t         = s_t + e_t,  e_t ~ N(0, h)       ...
-                                                  [phi_r, 0, ..., 0]]
-                                             R = [1, -theta_1, ..., -theta_{r-1}]
-
-(phi_i = 0 for i > p, theta_j = 0 for j > q). ``h = 0`` is the plain ARMA observed
-exactly; ``h > 0`` adds white measurement noise (used to denoise a drift record).
-The state starts from its stationary law N(0, P0), P0 = T P0 T' + sigma2 R R' (discrete
-Lyapunov equation, solved exactly through (I - T (x) T) vec P0 = vec Q).
-
-Everything here is pure JAX: jit-, grad- and vmap-able, loops are ``lax.scan``.
+Harvey's form, r = max(p, q + 1): alpha_{t+1} = T alpha_t + R a_{t+1}, T = [phi | I; 0],
+R = [1, -theta_1, ..., -theta_{r-1}], y_t = alpha_t[0] + e_t, e_t ~ N(0, h) (h = 0: exact ARMA).
+Start N(0, P0), P0 = T P0 T' + sigma2 RR' solved via (I - T (x) T) vec P0 = vec Q.
 """
 
 from __future__ import annotations
