@@ -1,8 +1,4 @@
-"""HTML calibration reports: the sections, the headline and the page that
-``fogbayes report`` and :func:`fogbayes.report` write.
+"""HTML calibration reports: the sections, headline and page of ``fogbayes report`` and :func:`fogbayes.report`.
 
-This package renders only: what a report shows is computed by
-:mod:`fogbayes.workflow.report` (fit, compensate, Allan analysis, intervals), which hands
-the numbers to the sections here. Figures come from :mod:`fogbayes.plot`; nothing here
-fits a model.
+Renders only: the numbers come from :mod:`fogbayes.workflow.report`, figures from :mod:`fogbayes.plot`.
 """

@@ -1,38 +1,10 @@
-"""Intervals for bias stability and its improvement: a circular block bootstrap.
+"""Intervals for bias stability and its improvement: a circular block bootstrap (NumPy).
 
-Bias stability (paper 004 eq. 13) is the sample standard deviation of the rate averaged
-over consecutive windows (1 s in the paper). A chi-square interval for it would assume the
-window means are independent; FOG output is coloured (flicker, random walk, thermal drift),
-so neighbouring means are correlated and that interval is too narrow. Here the means are
-resampled in contiguous blocks instead:
-
-* **circular block bootstrap** (Politis & Romano 1992): ``ceil(n / L)`` blocks of ``L``
-  consecutive means, each starting at a uniformly drawn position, wrapping at the end, so
-  every mean is equally likely to be drawn; the standard deviation of the concatenation is
-  one bootstrap draw;
-* **block length** ``L`` from the autocorrelation of the means, by the automatic rule of
-  Politis & White (2004) with the correction of Patton, Politis & White (2009) for the
-  circular bootstrap (flat-top lag window), computed for every series resampled together
-  and the largest taken; at least 1 and at most ``n / 3``;
-* **one resample for every series**: before and after (and several models) are resampled
-  with the same block starts, so their correlation is kept and the improvement
-  ``100 (1 - after / before)`` is bootstrapped as a ratio of the same draw;
-* **percentile interval** at ``level`` (90 % by default), ``n_boot`` = 2000 draws from a
-  fixed seed (0), so a report is reproducible.
-
-What the interval means: the spread of the statistic over records like this one, treating
-the sequence of means as stationary with dependence shorter than ``L``. For a record whose
-"before" is dominated by a deterministic thermal drift, the before interval says how much
-the number depends on which parts of the temperature profile the record holds, not how
-repeatable the chamber run is.
-
-Measured coverage of the 90 % interval (tests/test_report_bootstrap.py, 200 repetitions):
-0.92 on white means (n = 1000), 0.90 on AR(1) means with phi = 0.5 (n = 3600), 0.88 for
-the improvement ratio. With strong dependence the block bootstrap undercovers (AR(1)
-phi = 0.8: about 0.86; phi = 0.95: about 0.81 at n = 3600), still far better than the
-chi-square interval (about 0.80 already at phi = 0.5).
-
-Only numpy; nothing here reads files or draws figures.
+Circular block bootstrap (Politis & Romano 1992) of the window means, block length L by
+Politis & White (2004) with Patton, Politis & White (2009) (largest over the series, 1 <= L <= n/3);
+before and after share the block starts, so the improvement 100 (1 - after / before) is a ratio
+of the same draw. Percentile interval at ``level`` (0.9), ``n_boot`` = 2000, seed 0. It assumes
+stationary means with dependence shorter than L.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
 """Report sections for a loop calibration applied to a recording (``report --fit loop.json``).
 
-The loop document's calibration (:mod:`fogbayes.loop.calibration`) is applied to the
-recording being reported -- usually another run of the sensor -- and the report says what
-was applied (each term, sensor property or run event, in physical units +- 1 s.e. -- the
-base polynomial in its raw form -- beside its coefficient on the centred/scaled column),
-what was left out, where the recording leaves the calibrated
-range, and the bias stability before/after with its bootstrap interval.
+What was applied (:mod:`fogbayes.loop.calibration`: each term in physical units +- 1 s.e.),
+what was left out, where the recording leaves the calibrated range, and bias stability
+before/after with its bootstrap interval.
 """
 
 from __future__ import annotations

@@ -1,17 +1,7 @@
-"""What a composite (paper 000) report shows: the raw coefficients with their intervals, and
-the relative rate error of the table cells before -> after with an interval of its median.
+"""Composite (paper 000) report: raw coefficients with intervals, cell errors before -> after.
 
-The model (:mod:`fogbayes.composite.model`), output U in the recording's unit::
-
-    U = sum_{i,j} M_ij T^i W^(j+1) + sum_i c_i T^i + t sum_i d_i T^i
-
-(T in °C, W in °/s, t the operating time in s), so ``M[i,j]`` is in U per °C^i (°/s)^(j+1),
-``c[i]`` in U per °C^i and ``d[i]`` in U per s °C^i.
-
-The median relative error over the cells gets a distribution-free interval: the cells'
-errors are exchangeable draws, and for n of them the median lies between the order
-statistics x_(k) and x_(n+1-k) with probability 1 - 2 P(Bin(n, 1/2) < k), whatever the
-errors' distribution; k is the largest whose coverage is at least the level.
+U = sum M_ij T^i W^(j+1) + sum c_i T^i + t sum d_i T^i (T °C, W °/s, t s). The median cell
+error's distribution-free interval is [x_(k), x_(n+1-k)], coverage 1 - 2 P(Bin(n, 1/2) < k).
 """
 
 from __future__ import annotations

@@ -1,17 +1,8 @@
 """An added effect in words: its size in physical units and the parameter the loop searched.
 
-The loop fits every term on a centred, scaled column; each term kind turns its coefficient
-back into physical units (``steps[].detail``, :func:`fogbayes.diagnose.terms.describe`).
-This module writes that reading as one phrase -- the same phrase in the loop report's
-verdict, the ``fogbayes loop`` result line and the report of a loop calibration applied to
-another run (``fogbayes report --fit loop.json``)::
-
-    step: size 0.238 ± 0.018 deg/h at t = 1810 s (0.503 h) from the start
-    temperature_rate (dT/dt): coefficient 0.3094 ± 0.0018 deg/h per (°C/min)
-
-A detail key is ``<quantity>_<unit>``, the unit spelled with ``_`` for ``/`` and ``_per_``
-between numerator and denominator (``coefficient_deg_h_per_degC_per_min``); a value is
-``{"value", "stderr"}`` (± one standard error).
+One phrase per ``steps[].detail`` (:func:`fogbayes.diagnose.terms.describe`), e.g.
+``step: size 0.238 ± 0.018 deg/h at t = 1810 s (0.503 h) from the start``. Detail keys are
+``<quantity>_<unit>`` (``_`` for ``/``, ``_per_``), values ``{"value", "stderr"}``.
 """
 
 from __future__ import annotations
