@@ -1,10 +1,7 @@
 """Synthetic FOG recordings with known truth (profiles, deterministic effects, noise).
 
-    >>> from fogbayes.simulate import simulate, SCENARIOS
-    >>> rec, truth = simulate("thermal", seed=0, duration=3600.0)
-
-See :func:`simulate` for the options, :data:`SCENARIOS` for the named scenarios,
-:data:`EFFECTS` for the effect names, :mod:`.noise` for the generators.
+:func:`simulate` (``rec, truth = simulate("thermal", seed=0, duration=3600.0)``),
+:data:`SCENARIOS`, :data:`EFFECTS`, :mod:`.noise`.
 """
 
 from .noise import (allan_noise, allan_variance_model, arma_noise, flicker_avar,

@@ -1,37 +1,10 @@
 """Stochastic gyro noise with exactly specified parameters (rate in deg/h).
 
-The five-term Allan model (paper 002, IEEE Std 952), sigma in deg/h and tau in s::
-
-    sigma^2(tau) = 3 Q^2 / tau^2 + N^2 / tau + (2 ln2 / pi) B^2 + K^2 tau / 3 + R^2 tau^2 / 2
-
-with the parameters in their canonical units and the conversions used here:
-
-    Q  arcsec          = deg/h * s          (used as is)
-    N  deg/sqrt(h)     -> N_s = 60 N        deg/h * sqrt(s)
-    B  deg/h                                (used as is)
-    K  deg/h^1.5       -> K_s = K / 60      deg/h / sqrt(s)
-    R  deg/h^2         -> R_s = R / 3600    deg/h / s
-
-How each term is made (all vectorised: cumsum, FFT, lfilter; no per-sample Python loop):
-
-* quantization Q: white angle noise e_k ~ N(0, Q^2) differentiated, x_k = (e_{k+1} - e_k) fs.
-  Exact for every cluster time tau = m / fs: sigma^2 = 3 Q^2 / tau^2.
-* angle random walk N: white rate noise of std N_s sqrt(fs). Exact: sigma^2 = N_s^2 / tau.
-* bias instability B: FFT-shaped flicker (1/f) noise with one-sided PSD S(f) = B^2 / (pi f)
-  on the Fourier bins 1/(span T) ... fs/2 of a record ``span`` times longer (random phases
-  and Gaussian amplitudes, no DC), of which the first T is kept. A periodic record
-  (span 1) would force a full cycle of period T into every realisation: against a chamber
-  programme that heats then cools, that sine is a hysteresis loop. Its ADEV is 0.664 B
-  within 1.5 % for 4/fs <= tau <= T/20; it is 4 % high at tau = 2/fs and 9 % high
-  (0.724 B) at tau = 1/fs (the sampled 1/f spectrum). :func:`flicker_avar` gives the exact
-  expected Allan variance of this generator at any m.
-* rate random walk K: a Brownian motion of intensity K_s averaged over each sample interval
-  (an integrating gyro), drawn exactly (joint Gaussian of interval increment and interval
-  mean), so sigma^2 = K_s^2 tau / 3 holds exactly at tau = m / fs.
-* rate ramp R: the deterministic ramp R_s t (t from 0); sigma^2 = R_s^2 tau^2 / 2 exactly.
-
-Each term draws from its own stream derived from (seed, term), so switching one term on or
-off leaves the realisation of the others unchanged.
+sigma^2(tau) = 3 Q^2/tau^2 + N_s^2/tau + (2 ln2/pi) B^2 + K_s^2 tau/3 + R_s^2 tau^2/2 (units of
+:mod:`fogbayes.allan.model`). Q: differentiated white angle noise; N: white rate, std
+N_s sqrt(fs); B: FFT-shaped 1/f noise, PSD B^2 / (pi f), from a record ``span`` times longer
+(:func:`flicker_avar` gives its exact AVAR); K: interval means of a Brownian motion, drawn
+exactly; R: the ramp R_s t. Each term has its own stream from (seed, term).
 """
 
 from __future__ import annotations

@@ -1,23 +1,9 @@
 """Test profiles: thermal-chamber programmes, lagging sensor temperatures, rate tables.
 
-A chamber programme is a list of segments, ``Soak(temperature, duration)`` and
-``Ramp(to, rate)`` (rate in deg C/min, its sign taken from the direction), turned into a
-piecewise-linear chamber temperature. Each temperature sensor follows the chamber through a
-first-order lag (time constant tau, s)::
-
-    tau dT_s/dt = T_chamber - T_s
-
-solved exactly for an input that is linear between samples (ramp-invariant discretisation,
-so the result does not depend on the sample rate):
-
-    T_s[k+1] = a T_s[k] + (1 - c) u[k+1] + (c - a) u[k],   a = exp(-h/tau), c = tau (1 - a) / h
-
-The temperature rate of each channel is exact, not a finite difference: the sensor obeys
-the ODE at every instant, so at each sample ``dT_s/dt = (T_chamber - T_s) / tau`` (a channel
-with tau = 0 follows the programme's own slope). This is the physical driver of rate effects
-(the Shupe term); an estimator working on a recorded channel is judged against it.
-
-Two channels with different lags model paper 004's outer and inner coil sensors.
+Programmes of ``Soak(temperature, duration)`` and ``Ramp(to, rate)`` (deg C/min). Sensors follow
+tau dT_s/dt = T_chamber - T_s, exact for piecewise-linear input:
+T_s[k+1] = a T_s[k] + (1 - c) u[k+1] + (c - a) u[k], a = exp(-h/tau), c = tau (1 - a)/h; their
+rate is exact, (T_chamber - T_s)/tau (:func:`sensor_rates`).
 """
 
 from __future__ import annotations

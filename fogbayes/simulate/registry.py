@@ -1,16 +1,9 @@
-"""Effects by name: which covariates each needs, its default parameters, one-line help.
+"""Effects by name: covariates needed, default parameters, one-line help.
 
-``effect_rate(name, cov, params)`` evaluates a deterministic effect in deg/h from the
-true covariates (:class:`~fogbayes.simulate.truth.Covariates`). The names are those the
-closed loop knows (docs/DESIGN.md); ``markov_noise`` is the one stochastic effect and is drawn
-by the scenario with its own seed stream.
-
-Every effect the loop can find is planted through the loop's own term kinds
-(:mod:`fogbayes.diagnose.kinds`): ``EffectSpec.terms(params)`` gives (term, coefficients)
-pairs in physical units, e.g. the Shupe term k dT/dt is ``(rate{scale: 1}, [k])``, so truth
-and model share one definition of each column. Their closed forms
-(:mod:`fogbayes.simulate.effects`) are the independent reference the tests compare with,
-paper 004's bias (:func:`~fogbayes.simulate.effects.paper004_bias`) among them.
+``effect_rate(name, cov, params)`` in deg/h from :class:`~fogbayes.simulate.truth.Covariates`;
+``EffectSpec.terms(params)`` plants each through the loop's term kinds
+(:mod:`fogbayes.diagnose.kinds`); closed forms in :mod:`fogbayes.simulate.effects` are the
+independent reference. ``markov_noise`` is drawn by the scenario.
 """
 
 from __future__ import annotations

@@ -1,13 +1,7 @@
 """Named simulation scenarios: ``simulate(name, *, seed, ...) -> Simulated(recording, truth)``.
 
-Every scenario builds true covariates (time, temperatures, dT/dt, input rate) from a test
-profile, evaluates its own model plus any extra effects by name, adds noise with exactly
-specified Allan parameters, and returns the Recording with its :class:`Truth`::
-
-    output = sum(truth.effects) + sum(truth.noise_parts)     (output unit)
-
-Effects and noise are specified in deg/h and converted to the output unit (deg/h, deg/s,
-rad/s, or V/Hz via ``scale_factor`` raw units per deg/s).
+output = sum(truth.effects) + sum(truth.noise_parts), specified in deg/h and converted to the
+output unit (deg/h, deg/s, rad/s, or raw units via ``scale_factor``).
 """
 
 from __future__ import annotations
