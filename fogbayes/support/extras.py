@@ -1,18 +1,7 @@
-"""Packages that only some users need, installed with an extra of fogbayes.
+"""Packages only some users need: ``fogbayes[parquet]`` (pyarrow), ``fogbayes[dask]``, ``fogbayes[all]``.
 
-The core install reads and writes CSV and NPZ files and runs every analysis in this
-process. Two features need packages of their own::
-
-    pip install 'fogbayes[parquet]'   # pyarrow: .parquet/.pq recordings and outputs
-    pip install 'fogbayes[dask]'      # distributed: fogbayes batch --engine dask
-    pip install 'fogbayes[all]'       # both
-
-Every place that uses one imports it through :func:`require`, inside the function that
-needs it, so a missing package costs nothing until the feature is asked for, and then is
-one line (a :class:`~fogbayes.errors.MissingExtraError`; the command line prints it and
-exits with code 2)::
-
-    fogbayes: error: Parquet files need pyarrow, which is not installed. Fix: pip install 'fogbayes[parquet]'
+Imported through :func:`require` inside the function that needs it; missing, it raises a
+:class:`~fogbayes.errors.MissingExtraError` (one ``fogbayes: error:`` line, exit 2).
 """
 
 from __future__ import annotations

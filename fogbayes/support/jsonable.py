@@ -1,23 +1,8 @@
-"""Plain-JSON form of fogbayes results: one sanitiser for every JSON document we write.
+"""Plain-JSON form of fogbayes results: one sanitiser for every JSON document written.
 
-:func:`to_jsonable` turns what fits, loops and commands return into types ``json.dumps``
-accepts, recursively:
-
-* NaN and +-inf -> ``None`` (JSON has no such numbers; ``json.dumps`` would write the
-  invalid tokens ``NaN``/``Infinity`` that strict parsers reject);
-* NumPy / JAX scalars and arrays -> Python ``bool``/``int``/``float`` and nested lists;
-* NamedTuples and dataclass instances -> dicts of their fields (field names are what a
-  reader looks for; a bare list would lose them);
-* other tuples, lists and sets -> lists (sets sorted when their items allow it, so the
-  output does not depend on hashing);
-* dict keys -> ``str``; ``pathlib.Path`` (any ``os.PathLike``) -> ``str``.
-
-Anything else (``str``, ``None``, plain numbers) is returned as it is.
-
-Example:
-    >>> import numpy as np
-    >>> to_jsonable({"a": np.float64("nan"), "b": np.arange(3), 1: (np.int32(2), True)})
-    {'a': None, 'b': [0, 1, 2], '1': [2, True]}
+:func:`to_jsonable`, recursively: NaN/inf -> ``None``; NumPy/JAX scalars and arrays -> Python
+numbers and lists; NamedTuples and dataclasses -> dicts; tuples, lists, sets (sorted) -> lists;
+keys and paths -> ``str``.
 """
 
 from __future__ import annotations

@@ -1,20 +1,8 @@
 """Numba, with fogbayes's compiled-function cache kept out of the installed package.
 
-Numba's ``cache=True`` writes machine code into ``__pycache__`` beside the source file by
-default. For an installed package that is ``site-packages/fogbayes/*/__pycache__``: files
-pip did not install and does not remove. After ``pip install .`` then ``pip install -e .``
-those leftover folders made ``site-packages/fogbayes`` a namespace package that shadowed the
-editable install (``import fogbayes`` then ran no ``__init__``: float32 JAX, broken CLI).
-
-Importing numba through this module registers a cache locator, ahead of Numba's own, that
-puts the cache of every function defined in a fogbayes source file under
-:func:`fogbayes_cache_dir` ``/numba``. If that folder cannot be written, the locator uses a
-per-user folder in the system's temporary directory; it never falls through to the in-tree
-locator, so nothing is ever written into the package (with neither folder writable it
-uses Numba's own per-user cache folder).
-
-Every fogbayes module that compiles with Numba imports ``numba`` from here, and spreads rows
-(sensors) over the cores with :func:`over_rows`.
+Registers a cache locator for fogbayes sources: :func:`fogbayes_cache_dir` ``/numba``, else a
+per-user temporary folder, never ``__pycache__`` in the package. Fogbayes modules import
+``numba`` from here and spread rows over the cores with :func:`over_rows`.
 """
 
 from __future__ import annotations

@@ -1,29 +1,10 @@
 """fogbayes's compiled programs, and a bound on the memory maps their machine code holds.
 
-XLA:CPU (jax 0.9) builds every kernel of a program as an object of its own and keeps three
-anonymous memory maps per kernel (code, read-only data, data) for as long as the program is
-cached: a small program holds ~6 maps, an ARMA fit (L-BFGS, line search, Hessian) ~1 200-
-1 450 (docs/CONTRIBUTING.md). A process that compiles many *different* programs (every ARMA
-order and sampler, the loop's filters, the Bayesian fits of each family: a long notebook
-session, a service, the test suite) passes the kernel's ``vm.max_map_count`` (65 530 by
-default) and the next ``mmap`` fails inside LLVM: the process dies (SIGSEGV or SIGABRT),
-with no Python error to catch. A process repeating the same shapes does not grow.
-
-So fogbayes compiles with :func:`program` (``jax.jit`` with the same options) and keeps
-a weak registry of those functions. After one of them compiles, the process's maps are
-counted; past :data:`MAP_SHARE` of the kernel's limit, the compiled code of every *other*
-fogbayes program is dropped (``clear_cache``): their next call traces again and reads the
-persistent program cache (:mod:`fogbayes._config`) or compiles. Programs of the user's own,
-and JAX's, are left alone. The check costs a read of ``/proc/self/maps`` after a
-compilation only (milliseconds, against seconds of compiling); off Linux there is no count
-and nothing is dropped.
-
-Maps held outside fogbayes's programs (JAX's and NumPyro's small programs, the user's) are
-not given back by a release. So the next release waits until the count has grown by
-:data:`REGROW_SHARE` of the limit above what the last one left (never past
-:data:`CEILING_SHARE`): a process whose own maps alone sit past the limit does not drop and
-recompile fogbayes's programs after every compilation. Such a process is told once, by a
-``RuntimeWarning``, that it is nearing the kernel's limit and what frees it.
+XLA:CPU keeps memory maps per kernel; past ``vm.max_map_count`` a process dies in LLVM. Functions
+made by :func:`program` (``jax.jit``) are registered weakly; after a compilation, past
+:data:`MAP_SHARE` of the limit, the other fogbayes programs' code is dropped (``clear_cache``;
+they reload from :mod:`fogbayes._config`'s persistent cache). Releases wait for growth of
+:data:`REGROW_SHARE` (never past :data:`CEILING_SHARE`); a ``RuntimeWarning`` says so once. Linux only.
 """
 
 from __future__ import annotations
