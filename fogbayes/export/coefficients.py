@@ -1,30 +1,10 @@
-"""Coefficient export: a JSON document per model, and PX4 thermal-compensation parameters.
+"""Coefficient export: a JSON document per model, and PX4 / ArduPilot thermal-compensation parameters.
 
-The JSON document keeps the scaled-basis coefficients (what the compensator uses, exact),
-their covariance, and the raw coefficients in powers of the covariates (the papers' form,
-for display) with standard errors; :func:`basis_from_dict` rebuilds the basis.
-
-PX4 (``TC_G<i>_*`` parameters, rad/s): the firmware corrects a gyro axis ``a`` as::
-
-    dT     = clamp(T, TC_G<i>_TMIN, TC_G<i>_TMAX) - TC_G<i>_TREF
-    offset = X0_a + X1_a dT + X2_a dT^2 + X3_a dT^3            (parameters TC_G<i>_X<k>_<a>)
-    rate   = raw_rate - offset
-
-so only a cubic in one temperature fits (no dT/dt term: the firmware has no input for it).
-:func:`px4_gyro_parameters` rebases ``bias-t`` polynomials (order <= 3, deg/h) about TREF
-and converts them to rad/s; a ``thermal`` model raises an error that says so; a loop
-document's calibration goes through :func:`basis_from_loop` (which names any term PX4
-cannot take).
-
-ArduPilot (``INS_TCAL<i>_*``, AP_InertialSensor_tempcal.cpp): with ``P(d) = (c1 d + c2 d^2 +
-c3 d^3) * 1e-6`` (``c_k`` = parameter ``GYR<k>_<axis>``, rad/s) and ``T``, ``T_cal`` clamped
-to ``[TMIN, TMAX]``, the firmware corrects::
-
-    rate = raw_rate - P(T - 35) + P(T_cal - 35)
-
-where ``T_cal`` is the temperature of the boot-time gyro offset calibration (which removes
-the constant): :func:`ardupilot_gyro_parameters` rebases the cubic about 35 degC and drops
-its constant.
+JSON: scaled-basis coefficients, covariance, raw coefficients with standard errors
+(:func:`basis_from_dict`). PX4 (``TC_G<i>_*``, rad/s): offset = sum_k X<k> dT^k, dT = clamp(T) - TREF
+(:func:`px4_gyro_parameters`, bias-t order <= 3; loop documents via :func:`basis_from_loop`).
+ArduPilot (``INS_TCAL<i>_*``): rate = raw - P(T - 35) + P(T_cal - 35), P(d) = (c1 d + c2 d^2 + c3 d^3) 1e-6
+(:func:`ardupilot_gyro_parameters`).
 """
 
 from __future__ import annotations

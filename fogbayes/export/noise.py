@@ -1,31 +1,10 @@
-r"""Noise coefficients for filters: IEEE 952 terms in SI units, Kalibr/OpenVINS ``imu.yaml``.
+"""Noise coefficients for filters: IEEE 952 terms in SI units, Kalibr/OpenVINS ``imu.yaml``.
 
-An Allan document (``fogbayes allan --json``) holds the five IEEE 952 terms in the gyro
-community's units (:data:`fogbayes.allan.model.UNITS`). Filters want SI, continuous-time
-densities (the table is ``docs/units.md``):
-
-==========  ===================  ==========================  ===============================
-term        document unit        SI, continuous time         factor (document -> SI)
-==========  ===================  ==========================  ===============================
-Q           arcsec               rad                         pi / (180 * 3600)
-N (ARW)     deg/sqrt(h)          rad/s/sqrt(Hz) = rad/sqrt(s)  (pi/180) / 60
-B           deg/h                rad/s                       (pi/180) / 3600
-K (RRW)     deg/h^1.5            rad/s^2/sqrt(Hz)            (pi/180) / 3600 / 60
-R           deg/h^2              rad/s^2                     (pi/180) / 3600^2
-==========  ===================  ==========================  ===============================
-
-``B`` is the coefficient of the flicker term, sigma^2(tau) = (2 ln2 / pi) B^2 on the floor,
-so the ADEV floor ("bias instability" read off a plot) is 0.664 B: both are written.
-Discrete-time values at sample rate fs (what a filter adds per step) are
-``N_d = N sqrt(fs)`` (rad/s per sample) and ``K_d = K / sqrt(fs)`` (rad/s per step).
-
-Kalibr's ``imu.yaml`` takes ``gyroscope_noise_density`` = N and ``gyroscope_random_walk`` = K,
-continuous time, SI (Kalibr wiki "IMU Noise Model"; OpenVINS reads the same keys). One
-number per sensor: with several axes the largest is written (the conservative choice) and
-each axis is listed in a comment. Where the document gives an interval, ``quantile`` picks
-what is written: 0.5 the estimate, ``(1 - ci)/2`` / ``(1 + ci)/2`` the interval's ends
-(the document's ``ci``, 0.9 by default); other quantiles are not in the document and are
-refused rather than guessed.
+Factors document -> SI (docs/units.md): Q arcsec -> rad pi/648000; N deg/sqrt(h) -> rad/sqrt(s)
+(pi/180)/60; B deg/h -> rad/s (pi/180)/3600; K deg/h^1.5 -> rad/s^2/sqrt(Hz) (pi/180)/216000;
+R deg/h^2 -> rad/s^2 (pi/180)/3600^2. ADEV floor = 0.664 B; discrete N_d = N sqrt(fs), K_d = K / sqrt(fs).
+``imu.yaml``: ``gyroscope_noise_density`` = N, ``gyroscope_random_walk`` = K (largest axis);
+``quantile`` 0.5 or the document interval's ends, others refused.
 """
 
 from __future__ import annotations
