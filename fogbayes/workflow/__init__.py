@@ -1,17 +1,9 @@
-"""Workflows: the order of the stages for each model family, one module in each family's
-package.
+"""Workflows: the order of the stages for each model family.
 
 ``fit_recording(rec, *, model, orders=None, bayes=False, seed=0, **options) -> dict`` and
-``compensate_recording(rec, fit) -> dict[str, np.ndarray]`` (docs/DESIGN.md / contracts):
-
-* :mod:`fogbayes.thermal.workflow` -- ``bias-t`` and ``thermal`` (paper 004; the family's
-  package)
-* :mod:`fogbayes.composite.workflow` -- ``composite`` (paper 000; the family's package)
-* :mod:`fogbayes.allan.workflow` -- ``allan`` (five-term Allan model)
-* :mod:`fogbayes.arma.workflow` -- ``arma`` (paper 002 drift model; nothing to compensate)
-
-:func:`workflow_for` imports the module of a model name lazily, so that the command line
-and notebooks pay only for the model they use.
+``compensate_recording(rec, fit)`` in :mod:`fogbayes.thermal.workflow`,
+:mod:`fogbayes.composite.workflow`, :mod:`fogbayes.allan.workflow`, :mod:`fogbayes.arma.workflow`;
+:func:`workflow_for` imports one lazily.
 """
 
 from __future__ import annotations

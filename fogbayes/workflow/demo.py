@@ -1,15 +1,7 @@
 """The built-in demonstration: a simulated thermal-chamber test, start to finish.
 
-The story a calibration engineer would tell:
-
-1. simulate a FOG in a chamber (heating and cooling ramps between soaks) whose bias has a
-   quadratic temperature dependence AND a Shupe (temperature-rate) term, with FOG-like
-   noise (white + flicker + rate random walk): the truth is known;
-2. fit the model people usually declare, ``bias-t`` (a polynomial in temperature), and
-   paper 004's ``thermal`` model (polynomials in T and dT/dt);
-3. compensate with both and compare bias stability before and after (1 s / 10 s / 100 s);
-4. look at the Allan deviation of the raw and compensated output;
-5. write one self-contained HTML report and print a short summary.
+Simulate a FOG with a quadratic T bias and a Shupe term, fit ``bias-t`` and ``thermal``,
+compensate, compare bias stability and Allan deviations, write an HTML report and a summary.
 """
 
 from __future__ import annotations

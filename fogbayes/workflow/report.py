@@ -1,15 +1,9 @@
-"""Compute what a calibration report shows, then hand it to the renderer.
+"""Compute what a calibration report shows, then hand it to :mod:`fogbayes.render`.
 
-``build_report`` is the one place that decides which analyses a report needs: it fits
-(or takes a fit document), compensates, runs the Allan analysis on what is left,
-collects the covariates for the residual plots, tells the n-sigma flags that are gross
-errors from the noise's own tail (:func:`gross_errors`) and computes the headline's
-bias-stability intervals (:mod:`fogbayes.render.bootstrap`). :mod:`fogbayes.render` renders.
-:func:`report` is ``fogbayes.report(...)``: the same report from Python.
-
-Every report opens with the headline (:mod:`fogbayes.render.headline`): what was
-calibrated, the model, bias stability before -> after with 90 % block-bootstrap
-intervals, the improvement with its interval, and a verdict.
+``build_report`` fits (or takes a document), compensates, runs the Allan analysis, separates
+gross errors (:func:`gross_errors`) and computes the headline's bootstrap intervals
+(:mod:`fogbayes.render.bootstrap`, :mod:`fogbayes.render.headline`). :func:`report` is
+``fogbayes.report(...)``.
 """
 
 from __future__ import annotations
