@@ -1,12 +1,8 @@
-"""Figures of the closed loop: the story, step by step (its report section is
-:mod:`fogbayes.render.loop`).
+"""Figures of the closed loop, step by step (report section :mod:`fogbayes.render.loop`).
 
-For every added effect: the residual of the model *before* the step (10 s block means)
-against time with the added term's fitted contribution on top, and the same residual
-against the term's own driver (a partial-residual plot) -- the residual that justified
-the addition. A term driven by time itself (a step, a drift) shows the residual before and
-after the step instead, since against time the first panel would be drawn twice. Noise
-steps show the autocorrelation of the whitened residual instead.
+Per added effect: the residual before the step against time with the term's contribution, and
+against the term's driver (partial residual); time-driven terms show before/after; noise steps
+the whitened residual's ACF.
 """
 
 from __future__ import annotations
