@@ -267,3 +267,31 @@ def test_demo_summary_that_fails_leaves_no_report_or_recording(tmp_path, capsys,
                       "--json", tmp_path / "demo.json"], capsys)
     assert code == 2 and err == ["fogbayes: error: demo.json: the summary failed"], err
     assert [p.name for p in tmp_path.rglob("*")] in ([], ["demo"])  # at most the folder
+
+
+@pytest.mark.parametrize("name", ["c.csv", ".hidden.json", "x.tar.gz", "noext", "a.b.npz"])
+def test_final_path_undoes_temp_path(tmp_path, name):
+    from fogbayes.data.atomic import final_path, temp_path
+
+    tmp = temp_path(tmp_path / name)
+    assert is_temp_name(tmp.name) and final_path(tmp) == tmp_path / name
+    assert final_path(tmp_path / name) == tmp_path / name  # not a temporary: unchanged
+
+
+def test_an_os_error_on_a_temporary_names_the_users_file(files, tmp_path, capsys,
+                                                         monkeypatch):
+    """A writer outside atomic_path's own checks (a stream writer, a library) fails on its
+    temporary file: the one line names the output the user gave."""
+    import fogbayes.cli.fit as fit
+    from fogbayes.data.atomic import temp_path
+
+    out = tmp_path / "f.json"
+
+    def refused(*args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(temp_path(out)))
+
+    monkeypatch.setattr(fit, "write_json", refused)
+    code, err = _run(["-q", "fit", files / "rec.csv", "-m", "bias-t", "--json", out], capsys)
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"fogbayes: error: {out}: Permission denied"), err
+    assert ".tmp-" not in err[0], err

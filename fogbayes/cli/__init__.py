@@ -132,7 +132,9 @@ def main(argv: list[str] | None = None) -> int:
             sys.stdout = _PacifyFlushWrapper(sys.stdout)
             sys.stderr = _PacifyFlushWrapper(sys.stderr)
             return 1
-        where = f"{exc.filename}: " if exc.filename else ""
+        from ..data.atomic import final_path  # the user's name, not the .tmp- one
+
+        where = f"{final_path(exc.filename)}: " if exc.filename else ""
         print(f"fogbayes: error: {where}{exc.strerror or exc}. Fix: check the path and its "
               "folder's permissions", file=sys.stderr)
         return 2

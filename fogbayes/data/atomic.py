@@ -24,6 +24,7 @@ renamed into place. An existing target folder is replaced only when it holds not
 from __future__ import annotations
 
 import os
+import re
 import secrets
 import shutil
 from collections.abc import Iterator
@@ -63,6 +64,15 @@ def temp_path(path: str | Path) -> Path:
     path = Path(path)
     return path.with_name(f".{path.stem}{TMP_MARK}{os.getpid()}-{secrets.token_hex(4)}"
                           f"{path.suffix}")
+
+
+def final_path(path: str | Path) -> Path:
+    """The path a temporary name of :func:`temp_path` stands for (``.c.tmp-12-ab.csv`` ->
+    ``c.csv``, in the same folder); any other path unchanged. For messages: the user named
+    the final path, never the temporary one."""
+    path = Path(path)
+    m = re.fullmatch(rf"\.(.*){re.escape(TMP_MARK)}\d+-[0-9a-f]+(\.[^.]*)?", path.name)
+    return path if m is None else path.with_name(m.group(1) + (m.group(2) or ""))
 
 
 def is_temp_name(name: str) -> bool:
