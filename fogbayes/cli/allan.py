@@ -21,7 +21,7 @@ from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, fit_channels
 
 _TAUS = ("octave", "decade", "dense", "all")
 _KINDS = ("oadev", "adev", "mdev", "tdev", "ohdev", "hdev", "totdev", "mtotdev", "ttotdev",
-          "htotdev", "theo1")
+          "htotdev", "theo1", "theobr", "theoh")
 _BIASED = ("totdev", "htotdev", "theo1")
 
 
@@ -75,7 +75,9 @@ def allan(
         "oadev", "--kind",
         help="Also compute this deviation, stored under 'deviation' with 90 % intervals (the "
              "noise fit stays on the OADEV): " + " | ".join(_KINDS) + ". htotdev (Hadamard "
-             "total) ignores a rate ramp; theo1 reports tau = 0.75 m tau0."),
+             "total) ignores a rate ramp; theo1 reports tau = 0.75 m tau0; theobr is Theo1 "
+             "times the record's AVAR/Theo1 (Stable32); theoh is OADEV below 20 % of the "
+             "record, theobr above."),
     bias_corrected: bool = typer.Option(
         False, "--bias-corrected",
         help="With --kind " + ", ".join(_BIASED) + ": remove the estimator's bias for the "

@@ -50,7 +50,9 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             or a total deviation handled by :func:`fogbayes.stats.total.total_deviation`:
             ``totdev`` (NIST SP 1065 eq. 25), ``mtotdev`` (eq. 27), ``ttotdev``
             (tau MTOTDEV / sqrt(3)), ``htotdev`` (Hadamard total, drift-free; OHDEV at
-            m = 1) and ``theo1`` (eq. 30; even m, tau = 0.75 m / fs), with their own EDF
+            m = 1), ``theo1`` (eq. 30; even m, tau = 0.75 m / fs), ``theobr`` (Theo1 times
+            the record's mean AVAR/Theo1, Stable32) and ``theoh`` (OADEV below m = 0.2 n,
+            TheoBR above: :mod:`~fogbayes.stats.theoh`), with their own EDF
             (:mod:`~fogbayes.stats.edf_total`); no NaN gaps for these, ``method`` is not
             used and ``taus`` takes the same grids.
         per_decade: points per decade of the ``dense`` grid.
@@ -67,7 +69,8 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
             Htotvar/Hvar factors; ``totdev``: flicker and random-walk FM), see
             :func:`~fogbayes.stats.total.total_deviation`.
     """
-    if kind in ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1"):  # total family
+    if kind in ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr",
+                "theoh"):  # total family
         from .total import total_deviation
 
         return total_deviation(y, fs, taus=taus, kind=kind, ci=ci, m_max=m_max,
@@ -89,7 +92,7 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
     if kind not in KINDS:
         raise FogbayesError(f"unknown deviation '{kind}'",
                             fix=f"use one of {', '.join(KINDS)}, tdev, totdev, mtotdev, "
-                                "ttotdev, htotdev, theo1")
+                                "ttotdev, htotdev, theo1, theobr, theoh")
     if not (np.isfinite(fs) and fs > 0):
         raise FogbayesError(f"sample rate must be positive and finite, got {fs}",
                             fix="pass fs in Hz")

@@ -4,7 +4,7 @@ For even ``m``, ``2 <= m <= N - 1``, at :math:`\tau = 0.75\,m\,\tau_0`:
 :math:`\mathrm{Theo1} = \frac{1}{0.75(N-m)(m\tau_0)^2}\sum_{i}\sum_{\delta=0}^{m/2-1}
 \frac{[(x_i - x_{i-\delta+m/2}) + (x_{i+m} - x_{i+\delta+m/2})]^2}{m/2-\delta}`.
 Unbiased for white FM; other noises take :func:`~fogbayes.stats.edf_total.theo1_bias_ratio`.
-Sums: :func:`~fogbayes.stats.total_loops.theo1_sums`. TheoBR/TheoH are not implemented.
+Sums: :func:`~fogbayes.stats.total_loops.theo1_sums`. TheoBR/TheoH: :mod:`~fogbayes.stats.theoh`.
 """
 
 from __future__ import annotations

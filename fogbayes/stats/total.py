@@ -6,7 +6,9 @@ reached through :func:`~fogbayes.stats.allan.allan_deviation`). NIST SP 1065: ``
 subsequences, half-average slope removed, even reflection to ``9m``); ``ttotdev`` eq. 28
 (tau MTOTDEV / sqrt 3); ``htotdev`` sec. 5.2.14 (MTOTDEV's construction on the rate, ``bias_corrected``
 by :data:`~fogbayes.stats.edf_total.HTOTVAR_BIAS`); ``theo1`` (:mod:`~fogbayes.stats.theo1`,
-tau = 0.75 m tau0). Noise per tau: :func:`~fogbayes.stats.noise_id.identify_alphas`; EDF:
+tau = 0.75 m tau0); ``theobr`` and ``theoh`` (Theo1 times one AVAR/Theo1 factor per record,
+and its hybrid with OADEV: :mod:`~fogbayes.stats.theoh`). Noise per tau:
+:func:`~fogbayes.stats.noise_id.identify_alphas`; EDF:
 :mod:`~fogbayes.stats.edf_total`; interval :func:`~fogbayes.stats.edf.chi2_interval`. NaN is refused.
 """
 
@@ -28,7 +30,7 @@ from .total_loops import mtotvar_sums, phase_samples, prefix2, totvar_sums
 
 __all__ = ["KINDS", "total_deviation", "total_grid", "total_variance"]
 
-KINDS = ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1")
+KINDS = ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh")
 _NOTES = {
     "totdev": "TOTDEV (SP 1065 eq. 25, reflected phase); EDF SP 1065 Table 7 (alpha 0..-2), "
               "Table 5 (alpha 2, 1); noise type: lag-1 ACF (oadev rules)",
@@ -209,6 +211,13 @@ def total_deviation(y, fs: float, *, taus="octave", kind: str = "totdev", ci: fl
     n = y.shape[-1]
     if n < 4:
         raise TooShortError(f"{kind} needs at least 4 samples, got {n}", fix="record longer")
+    if kind in ("theobr", "theoh"):  # one bias factor per record: fogbayes.stats.theoh
+        if bias_corrected:
+            raise FogbayesError(f"{kind} is already bias-removed (Theo1 x AVAR/Theo1)",
+                                column="bias_corrected", fix="leave bias_corrected out")
+        from .theoh import theo_family
+
+        return theo_family(y, fs, taus, kind, ci=ci, m_max=m_max, per_decade=per_decade)
     ms = total_grid(n, taus, kind, m_max=m_max, per_decade=per_decade)
     rows = [_one(row, ms, kind, n, ci, bias_corrected) for row in (y if y.ndim == 2 else [y])]
     pick = (lambda k: np.stack([r[k] for r in rows])) if y.ndim == 2 else (lambda k: rows[0][k])
