@@ -1,35 +1,11 @@
 """Numerical configuration applied when fogbayes is imported.
 
-fogbayes fits in float64: the papers' coefficients span 1e1 ... 1e-12 and Allan variances
-span many decades, so single precision loses the answer. Importing fogbayes therefore turns
-on JAX's 64-bit mode (``jax_enable_x64``), the same switch as ``JAX_ENABLE_X64=1`` or
-``numpyro.enable_x64()``. Arrays created with an explicit ``dtype=jnp.float32`` stay
-float32, which is how the compensators run in single precision when asked.
-
-JAX is not imported here (0.5 s): ``fogbayes --help`` and commands that fit nothing do
-not need it. If JAX is already imported the switch is flipped now; otherwise the
-environment variable is set, which JAX reads when it is first imported. Child processes
-inherit that variable: JAX programs they run are float64 too (as fogbayes' own Dask
-workers need).
-
-Compiled programs are kept on disk (JAX's persistent compilation cache), so a second
-``fogbayes loop`` on a record of the same size does not compile again: on the README's 1 h
-record, 42-47 s the first time and 31-34 s the next (40 programs, 0.7 MB). They live under
-:func:`fogbayes_cache_dir` ``/jax/<host>`` (beside the Numba loops' ``/numba``), one folder
-per CPU (:func:`host_tag`: machine code built for one CPU's features can stop another with
-SIGILL, and a home folder may be shared by several machines), capped at
-:data:`CACHE_MAX_BYTES`, least recently used first out; programs that compiled in under
-:data:`CACHE_MIN_SECONDS` are not worth a file.
-
-With jax 0.9.2 the XLA:CPU loader logs two false "could lead to execution errors such as
-SIGILL" lines for every program it loads (jax-ml/jax#38445: two tuning flags checked as CPU
-features), so the cache is turned on only where fogbayes can silence XLA's C++ log
-(``TF_CPP_MIN_LOG_LEVEL=3``, read when JAX is first imported): fogbayes is imported before
-JAX, or that level was already set. ``FOGBAYES_JAX_CACHE=off`` turns the cache off; so does
-a ``TF_CPP_MIN_LOG_LEVEL`` below 3 set by the user (who wants XLA's log). A folder the user
-set for JAX itself (``JAX_COMPILATION_CACHE_DIR``, or ``jax.config.update`` before fogbayes
-is imported) is left as it is; an unwritable folder turns the cache off rather than warn at
-every compilation.
+Turns on JAX float64 (``jax_enable_x64``; explicit float32 arrays stay float32) without
+importing JAX (the environment variable, inherited by child processes). Enables JAX's persistent
+compilation cache under :func:`fogbayes_cache_dir` ``/jax/<host>`` (:func:`host_tag`; capped at
+:data:`CACHE_MAX_BYTES`, programs under :data:`CACHE_MIN_SECONDS` not stored) only where XLA's log
+can be silenced (jax-ml/jax#38445); ``FOGBAYES_JAX_CACHE=off`` or ``TF_CPP_MIN_LOG_LEVEL`` < 3
+turns it off; a user's own cache folder is left as it is.
 """
 
 import os

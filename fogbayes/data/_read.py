@@ -1,29 +1,11 @@
 """The readers behind :func:`fogbayes.data.load`: never silently wrong data.
 
-Each reader returns a :class:`Table` (columns, metadata, and for CSV the physical line of
-every data row and metadata key) or raises a :class:`~fogbayes.errors.FogbayesError`
-naming the file, the column and the row or line, and how to fix it.
-
-CSV: ``# key: value`` lines before the header carry metadata; blank lines are allowed
-anywhere and skipped; every physical line is counted, so the line an error names is the
-line an editor shows. Refused, where pandas alone would go on: two columns of one name
-(pandas renames the second ``name.1``), a row with more or fewer fields than the header
-(one extra field shifts every column, a missing one becomes NaN), a ``#`` line after the
-header, a metadata key given twice with different values, NUL bytes, non-UTF-8 text.
-The field separator (``,``, ``;`` or tab) and the decimal mark (``.`` or ``,``) are sniffed
-from the header and the first data lines when only one reading fits (:func:`sniff`: a
-``;``-separated file with decimal commas, as spreadsheet programs in most of Europe write
-it, reads as it is); when two readings fit, the error names ``--delimiter``/``--decimal``.
-
-NPZ: read member by member from the ZIP archive (CRC checked), headers checked against the
-bytes actually present before anything is allocated (a header claiming 1e15 rows is an
-error, not a 8 PB allocation), numbers only (no pickles, no object or string arrays), one
-1-D array per column, all of one length.
-
-Parquet: a damaged or foreign file, duplicate column names, and metadata that is not a
-JSON object are errors naming the file.
-
-Metadata values, arguments and physical plausibility are checked in
+Each returns a :class:`Table` (columns, metadata, CSV line numbers) or raises a
+:class:`~fogbayes.errors.FogbayesError` naming file, column, row or line and a fix. CSV:
+``# key: value`` metadata; refused: duplicate columns, ragged rows, ``#`` after the header,
+conflicting keys, NUL, non-UTF-8; separator and decimal mark sniffed (:func:`sniff`) or named
+by ``--delimiter``/``--decimal``. NPZ: members checked against their bytes, numbers only, 1-D,
+one length. Parquet: damaged files, duplicate names, non-object metadata. Plausibility:
 :mod:`fogbayes.data.checks`.
 """
 

@@ -1,18 +1,8 @@
-"""Multi-axis documents: one fit document per gyro axis (or column), written together.
+"""Multi-axis documents: one fit document per gyro axis, ``fogbayes.axes/1``.
 
-``fogbayes allan LOG --axis all`` (or ``--column gx,gy,gz``) analyses every axis of one
-recording and writes::
-
-    {"schema": "fogbayes.axes/1", "model": "allan", "fogbayes_version": "...",
-     "source": "flight.ulg", "axes": {"x": {<allan fit document>}, "y": {...}, "z": {...}}}
-
-Each entry is a complete fit document of the model (:data:`fogbayes.data.doc_rules.FIT_SCHEMA`),
-checked as one: a reader that wants a single axis takes ``doc["axes"][name]`` and has what
-``fogbayes allan`` writes for that axis alone.
-
-The reader checks every axis as a fit document
-(:func:`fogbayes.data.documents.validate_axes_document`): this module is the format, and
-the fit-document reader imports it, not the other way round.
+``{"schema", "model", "fogbayes_version", "source", "axes": {name: <fit document>}}`` written by
+``fogbayes allan --axis all`` / ``--column``; each entry is checked as a fit document
+(:func:`fogbayes.data.documents.validate_axes_document`).
 """
 
 from __future__ import annotations

@@ -1,17 +1,9 @@
 """What a JSON document fogbayes wrote is: the one place that recognises each kind.
 
-Every ``--json`` writer of the command line leaves a signature: a ``schema`` name
-(``fogbayes.fit/1`` with its ``model``, ``fogbayes.loop/1``, ``fogbayes.axes/1``,
-``fogbayes.pool/1``, ``fogbayes.plan/1``, ``fogbayes.plan_chamber/1``,
-``fogbayes.prior/1``, ``fogbayes.ieee952/1``) or, for the summaries that carry none, a set
-of keys only that writer puts together (``compensate --json``: file, params, out, rows,
-columns; ``info --json``; ``batch --json``; ``demo --json``; ``simulate --truth``).
-
-A reader that wants one kind (a calibration for ``compensate --params``, a noise document
-for ``loop --noise-prior``) calls :func:`refuse_other_kind` before checking fields, so that
-a document of another kind is named for what it is ("summary.json: this is a compensate
-summary (written by 'fogbayes compensate --json'), not a calibration document") instead of
-being reported as an unknown key of a document it never was.
+By its ``schema`` (``fogbayes.fit/1``, ``loop/1``, ``axes/1``, ``pool/1``, ``plan/1``,
+``plan_chamber/1``, ``prior/1``, ``ieee952/1``) or, for summaries without one, by its set of keys
+(compensate, info, batch, demo, simulate). :func:`refuse_other_kind` names a document of the
+wrong kind for what it is.
 """
 
 from __future__ import annotations

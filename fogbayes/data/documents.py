@@ -1,40 +1,11 @@
 """Fit documents: the versioned schema of what ``fogbayes fit --json`` writes, checked on read.
 
-Every fit document written (``fogbayes fit``, ``batch``, the workflows'
-``fit_recording``) starts with ``"schema": "fogbayes.fit/1"``. Every reader
-(``compensate --params``, ``report --fit``, batch and stream compensation, the PX4 export's
-:func:`fogbayes.export.coefficients.basis_from_dict`) goes through :func:`read_fit_document` /
-:func:`validate_fit_document`, which refuse, with a :class:`FitDocumentError` naming the
-document and the key path (``fit.json: key 'params.raw.coef': 2 values for 5 terms. Fix:
-...``):
-
-* a schema other than ``fogbayes.fit/<n>``, or a newer one than this version reads;
-  documents without ``schema`` (written before it existed) are read if they pass the rest;
-* a loop document (``fogbayes loop --json``): a different format;
-* nesting deeper than :data:`MAX_DEPTH`, NaN or infinity anywhere (fogbayes writes
-  ``null`` for those), values that are no JSON type;
-* an unknown model, unknown top-level keys (a newer writer), missing required keys,
-  wrong types;
-* per model, shapes and ranges: for ``bias-t``/``thermal`` the coefficient count equals the
-  number of terms, the exponents are those of ``params.spec`` (each 0..8), the covariance
-  is square of that size, centre/scale/valid range are finite and bounded, scales are
-  positive (the centred, scaled basis divides by them), every valid range is ordered
-  (min <= max) and lies inside the basis range; for ``composite`` the scaled parameter
-  count follows from the orders, scales are non-zero, calibrated ranges ordered; for
-  ``allan``/``arma`` the arrays the report draws have matching lengths.
-
-Why plain checks and not JSON Schema (``jsonschema``): most rules that matter here relate
-fields to each other (counts against terms, exponents against the model spec, ranges
-against the basis), which JSON Schema cannot state; its messages would have to be
-rewritten into one line with the key path anyway; and it recurses, so a maliciously deep
-document needs a guard before it. The checks below are one pass over the document plus a
-few lookups, and need no new dependency.
-
-The bounds (``COEF_LIMIT``, ``COVARIATE_LIMIT``, ... in :mod:`~fogbayes.data.doc_rules`)
-are far outside anything physical; they exist so that a document that passes cannot
-overflow float64 when applied. The checks every document shares and those of the noise
-models are in :mod:`~fogbayes.data.doc_models`; a model family with a package keeps its own
-rules beside its model (:data:`MODEL_CHECKS`), so this layer imports no family.
+Documents carry ``"schema": "fogbayes.fit/1"``; readers go through :func:`read_fit_document` /
+:func:`validate_fit_document`, which raise a :class:`FitDocumentError` naming document and key
+path for: another or newer schema, a loop document, depth beyond :data:`MAX_DEPTH`, NaN/inf,
+unknown model or keys, missing keys, wrong types, and each model's shapes and ranges (shared
+rules :mod:`~fogbayes.data.doc_models`, bounds :mod:`~fogbayes.data.doc_rules`, family rules
+:data:`MODEL_CHECKS`).
 """
 
 

@@ -1,16 +1,8 @@
-"""The Recording: the one data type that flows through fogbayes.
+"""The Recording: the one data type that flows through fogbayes (frozen, read-only float64 arrays).
 
-A Recording holds a gyro test as NumPy float64 arrays::
-
-    time          (n,)    s, strictly increasing; gaps allowed, never interpolated
-    output        (n,)    gyro output in ``unit`` (deg/h, deg/s, rad/s, or V/mV/Hz with
-                          ``scale_factor`` raw units per deg/s)
-    temperatures  (n, k)  k >= 0 temperature channels in deg C, named ``temperature_names``
-    input_rate    (n,)    reference input rate in deg/s (rate table), or None
-    meta          Metadata: sensor id, nominal sample rate, source file, free-form extras
-
-It is immutable (a frozen dataclass; arrays are made read-only), so preprocessing returns
-new Recordings instead of editing one in place.
+``time`` (n,) s, increasing, gaps allowed; ``output`` (n,) in ``unit`` (deg/h, deg/s, rad/s, or
+raw with ``scale_factor`` per deg/s); ``temperatures`` (n, k) deg C, ``temperature_names``;
+``input_rate`` (n,) deg/s or None; ``meta``.
 """
 
 from __future__ import annotations

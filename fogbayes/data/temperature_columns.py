@@ -1,10 +1,7 @@
 """Which columns of a file are its temperature channels when the user names none.
 
-:func:`fogbayes.data.save` lists the channels of a recording whose channel names are not
-the default ``temperature``, ``temperature_2``, ... in the metadata key ``temperatures``
-(a JSON list, the same in a CSV ``# temperatures: [...]`` line, Parquet and NPZ), so
-channels under any names survive a save/load round trip. Without that key the columns
-named ``temperature``, ``temperature_2``, ... are the channels, in that order.
+The metadata key ``temperatures`` (a JSON list, written by :func:`fogbayes.data.save`), else
+``temperature``, ``temperature_2``, ... in that order.
 """
 
 from __future__ import annotations

@@ -1,12 +1,7 @@
 """The unit of a recording's time column: from its name, or a hint from its spacing.
 
-A header that states the unit (``time_ms``, ``time [ms]``, ``time (us)``, ``t_µs``,
-``timestamp_ns``) is read in that unit when none is given (:func:`unit_in_name`).
-A plain ``time`` column read in seconds whose median step is :data:`HINT_STEP_S` or more
-(a sample rate of 0.1 Hz or less, where lab gyro recordings run at 1 Hz ... 10 kHz) is
-most often a millisecond or microsecond counter: :func:`spacing_hint` says which
-``--time-unit`` would give which sample rate. A hint, never a silent change: a slow
-recording in seconds is legitimate.
+:func:`unit_in_name` reads ``time_ms``, ``time [ms]``, ``t_µs``, ...; :func:`spacing_hint`
+suggests a ``--time-unit`` when a seconds column steps by :data:`HINT_STEP_S` or more (a hint only).
 """
 
 from __future__ import annotations

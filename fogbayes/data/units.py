@@ -1,10 +1,7 @@
 """Angular-rate units and conversions.
 
-Gyro outputs arrive as a rate (``deg/h``, ``deg/s``, ``rad/s``) or as a raw sensor
-quantity (``V`` for an analogue FOG such as paper 000's VG951, ``Hz`` for a pulse-output
-FOG such as paper 004's) together with a scale factor ``K`` in raw units per deg/s.
-Conversions between rate units are exact; a raw output is turned into a rate by
-``rate[deg/s] = output / K`` (the bias stays in the rate unless removed first).
+Rates ``deg/h``, ``deg/s``, ``rad/s`` convert exactly; raw outputs (``V``, ``Hz``, ...) with scale
+factor K in raw units per deg/s: rate[deg/s] = output / K.
 """
 
 from __future__ import annotations

@@ -1,46 +1,12 @@
-"""A cap on the random walk from a static run: what one record cannot tell by itself.
+"""A cap on the random walk from a static run (``--noise-prior``).
 
-One record cannot tell a slow deterministic excursion (a warm-up, a thermal transient)
-from a rate random walk: both have a 1/f^2 spectrum and similar Allan deviations, and only
-the exact shape tells them apart. With the walk free, the base fit's walk takes up part of
-a 0.5 deg/h warm-up (on the loop sweep's records a cap at K = 0.12 deg/h^1.5 did not bind
-and 0.06 barely did, against a true 0.02), the warm-up's evidence is then calibrated under
-that walk, and it is missed (0.5x warm-ups: 2 of 3, final RMS 3.05-3.77x the oracle's;
-benchmarks/RESULTS_loop.md). A static run of the
-same sensor says how large its walk can be; docs/DESIGN.md ("constrain the noise by what the
-record itself says about it ... priors"). The loop then bounds the walk by it:
-
-    K <= K_max,   i.e. for block means of length dt (s), relative to the white variance s2:
-    log_rw <= log(K_max^2 dt / 3600 / s2)
-
-(a rate walk of intensity K deg/h^1.5 adds K^2 dt / 3600 (deg/h)^2 per block; s2 is the
-base fit's white block-mean variance, so the cap is on the absolute walk whatever share of
-the short-term noise the flicker bank takes). K_max is the upper end of the static run's
-interval for K -- for ``fogbayes allan --json`` documents ``fit.terms.K.high`` (90 %), an
-upper bound also where K is not supported -- or a datasheet value (``{"K": 0.02}``). A
-datasheet prior document (``fogbayes prior``, schema ``fogbayes.prior/1``,
-:mod:`fogbayes.inference.datasheet`) gives K_max = value x looseness, the upper end of its
-90 % prior range for K (rate random walk); a sheet without RRW caps nothing and is refused,
-since a ``--noise-prior`` that silently bounds nothing would read as a bounded walk.
-
-A walk cap alone is escaped: a free Gauss-Markov component with a time constant near the
-record's length is a walk over the record, and ``markov_noise`` took a 0.5 deg/h warm-up
-once the walk was capped (benchmarks/RESULTS_loop.md). An Allan document therefore also caps
-that component by what the static run shows: a Gauss-Markov process of stationary std
-sigma and time constant tau_c has its largest ADEV, 0.618 sigma, at tau = 1.89 tau_c, so
-
-    sigma <= max ADEV_high(tau) / 0.618 over tau >= 0.95 dt,
-    tau_c <= longest tau of the static run / 1.89
-
-(log_mvar <= log(sigma_max^2 / s2) on the state's variance, which block averaging only
-lowers, so the cap errs loose; the loop's Markov time constants start at dt / 2, so
-their peaks lie at tau >= 0.95 dt, and the short-tau ADEV of white noise does not loosen the
-cap): a larger or slower component would have shown in the static run's ADEV. A bare
-``{"K": ...}`` and a datasheet prior (no ADEV curve) leave the Markov component free.
-
-The cap is a model assumption, not evidence: if the record's own walk is larger than the
-static run's (another sensor, another environment), the walk sits at the cap and the scans
-say so (``noise_model_at_bound``), and effects found under it need that caveat.
+One record cannot tell a slow excursion from a rate random walk, so the walk is bounded:
+K <= K_max, i.e. log_rw <= log(K_max^2 dt / 3600 / s2) (K in deg/h^1.5, s2 the white
+block-mean variance). K_max: ``fit.terms.K.high`` of a ``fogbayes allan --json`` document,
+``{"K": ...}``, or a ``fogbayes.prior/1`` sheet (value x looseness,
+:mod:`fogbayes.inference.datasheet`; no RRW is refused). An Allan document also caps a
+Gauss-Markov component: sigma <= max ADEV_high / 0.618, tau_c <= longest tau / 1.89. The cap is an
+assumption; reaching it is reported as ``noise_model_at_bound``.
 """
 
 from __future__ import annotations

@@ -1,41 +1,11 @@
-r"""Priors from a gyro datasheet: the ``fogbayes.prior/1`` document, its units and its density.
+"""Priors from a gyro datasheet: the ``fogbayes.prior/1`` document, its units and its density.
 
-A datasheet states angle random walk (ARW), bias instability and sometimes rate random walk
-(RRW). ``fogbayes prior`` turns them into a prior document in the canonical units of
-:mod:`fogbayes.allan.model`; ``fogbayes allan --bayes --prior`` uses it as the prior of
-the posterior, ``fogbayes loop --noise-prior`` as a cap on the random walk
-(:mod:`fogbayes.diagnose.noise_prior`).
-
-Document (canonical units; ``datasheet`` keeps what the sheet said)::
-
-    {"schema": "fogbayes.prior/1", "sensor": "KVH 1750",
-     "terms": {"N": {"value": 0.05, "unit": "deg/sqrt(h)", "looseness": 3,
-                     "datasheet": {"value": 0.05, "unit": "deg/sqrt(h)", "quantity": "ARW"}},
-               "B": {...}, "K": {...}}}
-
-Unit conversions to canonical (the factor ``f`` of :data:`UNIT_TABLE`, canonical = f x sheet):
-
-* ARW -> N deg/sqrt(h): 1 deg/h/sqrt(Hz) = 1 deg/h x sqrt(s) = 1 deg/h x sqrt(h)/60
-  = 1/60 deg/sqrt(h); 1 deg/s/sqrt(Hz) = 1 deg/sqrt(s) = 60 deg/sqrt(h);
-  1 rad/s/sqrt(Hz) = 1 rad/sqrt(s) = 60 x 180/pi deg/sqrt(h).
-* Bias instability -> B deg/h: 1 deg/s = 3600 deg/h, 1 rad/s = 3600 x 180/pi deg/h. A
-  datasheet's "bias instability" is usually the flat floor of the ADEV plot, which is
-  sqrt(2 ln2 / pi) B = 0.6643 B for flicker rate noise of coefficient B (IEEE 952 C.1), so
-  by default ``B = floor / 0.6643``; ``bias_instability_is="B"`` takes the number as B.
-* RRW -> K deg/h^1.5 (= deg/h/sqrt(h)): 1 deg/h/sqrt(s) = 60 deg/h^1.5; 1 deg/s/sqrt(h) =
-  3600 deg/h^1.5; 1 deg/s/sqrt(s) = 1 deg/s^2/sqrt(Hz) = 3600 x 60 = 216000 deg/h^1.5;
-  1 deg/h^2/sqrt(Hz) = 1/60 deg/h^1.5; rad in place of deg multiplies by 180/pi.
-
-Looseness L > 1: the prior of a term of sheet value v is log-normal,
-
-.. math::
-
-    \log\theta \sim \mathcal N(\log v,\ s^2), \qquad s = \ln L / z_{0.95},\ z_{0.95} = 1.6449,
-
-so that :math:`P(v/L \le \theta \le v L) = 0.90`: looseness 3 says the sensor's true value
-lies within a factor 3 of the sheet's with 90 % prior probability. The density of
-:math:`\theta` is :math:`p(\theta) = \exp(-(\ln\theta - \ln v)^2 / 2s^2) / (\theta s
-\sqrt{2\pi})` (scipy's ``lognorm(s, scale=v)``).
+``fogbayes prior`` turns a sheet's ARW, bias instability and RRW into N (deg/sqrt(h)), B (deg/h)
+and K (deg/h^1.5) of :mod:`fogbayes.allan.model` (factors in :data:`UNIT_TABLE`; a sheet's
+"bias instability" is the ADEV floor 0.6643 B unless ``bias_instability_is="B"``), keeping the
+sheet's own values under ``datasheet``. Used by ``fogbayes allan --bayes --prior`` and
+``fogbayes loop --noise-prior`` (:mod:`fogbayes.diagnose.noise_prior`). Looseness L:
+log theta ~ N(log v, s^2), s = ln L / 1.6449, so P(v/L <= theta <= v L) = 0.90.
 """
 
 from __future__ import annotations

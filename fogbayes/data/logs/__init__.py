@@ -1,19 +1,9 @@
-"""Gyro logs read directly: PX4 ULog, ROS 1 and ROS 2 bags, MCAP, ArduPilot DataFlash.
+"""Gyro logs read directly: PX4 ULog, ROS 1 and ROS 2 bags, MCAP, ArduPilot DataFlash (docs/logs.md).
 
-:func:`read_log` returns the :class:`~fogbayes.data._read.Table` that
-:func:`fogbayes.data.load` checks and turns into a Recording, as it does for a CSV file:
-
-    time          s, float64, as logged (PX4/ArduPilot: since boot; ROS: header stamp)
-    gyro_x/y/z    rad/s, the logged body rates
-    output        the axis picked (``axis``, default x)
-    temperature   deg C, where the log carries it
-
-and metadata naming the format, topic or message, instance, axis, time source and how the
-temperature was aligned (``unit: rad/s``, ``sensor_id``: file stem and topic/instance).
-
-Each format lives in its own module; the libraries (extra ``logs``: pyulog, rosbags, mcap,
-pymavlink) are imported inside the readers, so importing fogbayes, ``fogbayes --help`` and
-CSV users never load them. Documentation: docs/logs.md.
+:func:`read_log` returns a :class:`~fogbayes.data._read.Table` (``time`` s as logged,
+``gyro_x/y/z`` and ``output`` rad/s, ``temperature`` deg C, metadata on format, topic, instance,
+axis, time source, alignment) that :func:`fogbayes.data.load` checks. Libraries (extra ``logs``)
+are imported inside the readers.
 """
 
 from __future__ import annotations

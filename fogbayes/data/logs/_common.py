@@ -1,10 +1,7 @@
-"""What every log reader shares: its errors, quieting the libraries, and the Table it returns.
+"""What every log reader shares: errors, quieting the libraries, and :func:`gyro_table`.
 
-The readers hand :func:`gyro_table` the samples exactly as logged; it checks the time order
-and builds the :class:`~fogbayes.data._read.Table` that :func:`fogbayes.data.load` turns
-into a Recording. Nothing is dropped silently: exact repeats of a message (same stamp,
-same values: a log written twice over) are removed and counted in the metadata; any other
-stamp that does not increase is an error naming the message.
+:func:`gyro_table` checks time order and builds the Table: exact repeats are removed and
+counted in the metadata, any other non-increasing stamp is an error naming the message.
 """
 
 from __future__ import annotations

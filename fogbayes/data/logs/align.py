@@ -1,11 +1,7 @@
-"""Put a temperature published on its own (ROS ``sensor_msgs/Temperature``) onto the gyro's
-time stamps.
+"""Put a separately published temperature (ROS ``sensor_msgs/Temperature``) on the gyro's stamps.
 
-A temperature changes slowly next to a gyro's sampling, so it is interpolated linearly
-between its messages. Outside the span of its messages nothing is invented: the gyro
-samples before the first message and after the last hold that message's value, and how
-many samples that was is written into the metadata (``temperature_held_start``,
-``temperature_held_end``), where a report can show it.
+Linear interpolation between messages; outside their span the end values are held and
+counted (``temperature_held_start``, ``temperature_held_end``).
 """
 
 from __future__ import annotations

@@ -1,18 +1,8 @@
-"""ArduPilot DataFlash binary logs (``.bin``), read with pymavlink's ``DFReader``.
+"""ArduPilot DataFlash binary logs (``.bin``), read with pymavlink's ``DFReader`` (Python indexer).
 
-Format facts (ArduPilot ``AP_Logger``; ardupilot.org "Onboard Message Log Messages"):
-every message starts with the bytes ``0xA3 0x95`` and a type byte; type 0x80 (``FMT``)
-defines the other types: name, length, format characters and column names. The gyro is
-the ``IMU`` message: ``TimeUS`` (us since boot), ``GyrX``, ``GyrY``, ``GyrZ`` (rad/s, body
-frame, after the board rotation), ``T`` (deg C). Since ArduPilot 4.0 one ``IMU`` type
-holds every IMU, told apart by the instance column ``I``; older logs write ``IMU``,
-``IMU2`` and ``IMU3`` (instance 0, 1, 2) and the oldest use ``TimeMS`` (ms).
-
-``instance`` picks the IMU (default 0); ``topic`` may name the message type instead
-(``IMU2`` is instance 1 of an older log, ``GYR`` the fast-sampled gyro, timed by its
-``SampleUS``, without temperature). pymavlink's Python indexer is used rather than
-its compiled one: the compiled one prints skipped bytes from C, past any capture, while
-the Python one's notes (bad headers, skipped bytes) are captured into the metadata.
+``IMU``: ``TimeUS`` (us since boot; oldest ``TimeMS``), ``GyrX/Y/Z`` rad/s body frame, ``T`` deg C,
+instance column ``I`` (older logs ``IMU2``, ``IMU3``). ``instance`` picks the IMU, ``topic`` the
+message type (``GYR``: ``SampleUS``, no temperature). Parser notes go into the metadata.
 """
 
 from __future__ import annotations

@@ -1,11 +1,8 @@
 """What a flight log says about its rates before any fit: already corrected, or rotated.
 
-Flight firmware logs the gyro *after* its own thermal correction and board rotation
-(ArduPilot: ``INS_TCAL<i>_ENABLE``, ``AHRS_ORIENTATION``; PX4: ``TC_G_ENABLE``), while the
-thermal parameters it reads act on the sensor's own rates. A thermal fit of such a log is a
-fit of what the correction left, on rotated axes: usable as a check, wrong as a calibration.
-The readers put the logged parameter values in the Recording's metadata; this turns them
-into warnings that the fit document carries and ``fogbayes export`` repeats.
+Logged gyro rates are after the firmware's thermal correction and board rotation (ArduPilot
+``INS_TCAL<i>_ENABLE``, ``AHRS_ORIENTATION``; PX4 ``TC_G_ENABLE``); these parameters in the
+metadata become warnings in the fit document and ``fogbayes export``.
 """
 
 from __future__ import annotations

@@ -1,19 +1,8 @@
-"""ROS 1 bags (``.bag``), ROS 2 bags (a folder with ``metadata.yaml``, or one ``.db3`` or
-``.mcap`` storage file) and bare MCAP files with ROS 2 messages, read with rosbags.
+"""ROS 1 bags, ROS 2 bags (folder, ``.db3``, ``.mcap``) and bare MCAP, read with rosbags.
 
-Message facts (ROS ``sensor_msgs``; REP 103 for units): ``sensor_msgs/msg/Imu`` carries
-``angular_velocity`` x, y, z in rad/s in the frame ``header.frame_id``, stamped by
-``header.stamp`` (``sec`` + ``nanosec``, the driver's time of the sample: ROS time, usually
-Unix time); ``sensor_msgs/msg/Temperature`` carries ``temperature`` in deg C with its own
-stamp. The time is the header stamp, ``sec + nanosec * 1e-9`` in float64 (0.24 us steps at
-today's Unix times), not the bag's receive time, which adds transport jitter.
-
-Selection: ``topic`` names the Imu topic (default: the only one; several are an error that
-lists them). A Temperature topic, if the bag has exactly one, is interpolated onto the
-gyro stamps (:mod:`.align`); with several, name one after a comma,
-``topic="/imu/data,/imu/temperature"`` (ROS names cannot hold commas), or the read stops
-with an error listing them: a wrong sensor's temperature would be silently wrong.
-ROS bags have no instances: ``instance`` is an error.
+``sensor_msgs/msg/Imu`` ``angular_velocity`` rad/s, time = ``header.stamp`` (sec + nanosec 1e-9);
+``topic`` picks the Imu topic (several: an error listing them). One ``Temperature`` topic is
+aligned (:mod:`.align`); several need ``topic="/imu,/temp"``. ``instance`` is an error.
 """
 
 from __future__ import annotations

@@ -1,21 +1,8 @@
 """PX4 ULog (``.ulg``), read with pyulog.
 
-Format facts (docs.px4.io, "ULog File Format"; PX4 msg/*.msg):
-
-* ``sensor_gyro``: one topic per IMU, told apart by the ULog ``multi_id`` (the
-  ``instance``). Fields ``timestamp`` (publication) and, in PX4 >= 1.11,
-  ``timestamp_sample`` (when the sensor sampled), both in microseconds since boot; ``x``,
-  ``y``, ``z`` in rad/s (the driver's output, rotated into the body frame); ``temperature``
-  in deg C (NaN where the driver does not read it). Logged with ``SDLOG_PROFILE`` high rate
-  or sensor comparison, not by default.
-* ``sensor_combined``: logged by default; ``gyro_rad[0..2]`` in rad/s, ``timestamp`` in us,
-  no temperature. Used when there is no ``sensor_gyro``.
-
-The time is ``timestamp_sample`` where the topic has it (the sampling instant, free of the
-scheduling delay in ``timestamp``), else ``timestamp``, divided by 1e6 (float64 holds
-microseconds exactly for 285 years). Logging dropouts (the logger's buffer overflowed) and
-corruption pyulog detected are counted in the metadata: the samples they cost are gaps in
-the time stamps, never filled.
+``sensor_gyro`` (``multi_id`` = ``instance``; ``x, y, z`` rad/s, ``temperature`` deg C), else
+``sensor_combined`` (``gyro_rad``, no temperature). Time = ``timestamp_sample`` where present, else
+``timestamp``, in us / 1e6. Dropouts and corruption are counted in the metadata, gaps never filled.
 """
 
 from __future__ import annotations
