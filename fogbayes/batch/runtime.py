@@ -1,8 +1,7 @@
 """Run-time settings of a fleet fit: the cyclic GC paused, NumPy/SciPy's BLAS on one thread.
 
-Both measured on the 2-core box (benchmarks/RESULTS_batch.md): generation-2 collections cost
-~0.1 s at random per 1 000-sensor fit, and OpenBLAS threads busy-waiting after a call took
-the cores from the compiled loops that followed.
+Full collections and spinning OpenBLAS threads take time from the compiled loops
+(benchmarks/RESULTS_batch.md).
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
-"""The ``fogbayes`` command line: a thin layer over the library.
+"""The ``fogbayes`` command line: a thin layer over the library; each subcommand registers on :data:`app`.
 
-Every subcommand lives in its own module and registers itself on :data:`app`. ``main``
-turns a :class:`~fogbayes.errors.FogbayesError` (bad input) into one line on stderr and
-exit code 2, never a traceback; a usage error (a missing option, an unknown command) is one
-line too, naming the command's ``--help``, not click's usage box. SIGTERM is turned into ``SystemExit(143)`` while a command
-runs, and SIGINT (Ctrl-C) into ``SystemExit(130)`` with one line ``fogbayes: interrupted``,
-so that the atomic writers of
-:mod:`fogbayes.data.atomic` remove their temporary files: a killed command leaves the old
-output or none, never a truncated one.
+``main`` turns a :class:`~fogbayes.errors.FogbayesError` or a usage error into one stderr line
+(exit 2, no traceback); SIGTERM becomes ``SystemExit(143)`` and SIGINT ``SystemExit(130)``
+(``fogbayes: interrupted``), so the writers of :mod:`fogbayes.data.atomic` leave the old output or none.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
 """``fogbayes allan REC --json OUT``: Allan deviation with intervals and the five-term fit.
 
-Thin layer over :func:`fogbayes.allan.workflow.fit_recording`: loads the recording, writes
-the JSON document (canonical units: N deg/sqrt(h), B deg/h, K deg/h^1.5, R deg/h^2,
-Q arcsec and urad, whatever the input unit) and, with ``--plot``, the log-log figure.
-``--prior PRIOR.json`` (with ``--bayes``): a datasheet prior written by ``fogbayes prior``
-(:mod:`fogbayes.inference.datasheet`); the document records it under ``fit.prior``.
+Wires :func:`fogbayes.allan.workflow.fit_recording` (canonical units), ``--plot`` the figure,
+``--prior`` a datasheet prior (:mod:`fogbayes.inference.datasheet`) with ``--bayes``.
 """
 
 from __future__ import annotations

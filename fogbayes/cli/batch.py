@@ -1,11 +1,8 @@
 """``fogbayes batch DIR --model NAME --out DIR``: one task over a fleet of recordings.
 
-Wires :func:`fogbayes.batch.run_batch`: in-process (``--engine local``), on a Dask cluster of
-``--workers`` processes started here (``--engine dask``) or on an existing scheduler
-(``--address tcp://host:8786``), or, for ``bias-t``/``thermal`` recordings of one length
-and sampling, with one vectorised solve (``--vectorize``). Exit code 0 when every recording
-succeeded, 1 when any failed (``OUT/summary.json`` is written either way, one row per file),
-2 for input that stops the whole run (no folder, no recordings, unknown model or engine).
+Wires :func:`fogbayes.batch.run_batch` (``--engine local|dask``, ``--workers``, ``--address``,
+``--vectorize``). Exit 0 all succeeded, 1 any failed (``OUT/summary.json`` either way), 2 the run
+could not start.
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
 """``fogbayes export DOC... --format F --out FILE``: numbers for filters and firmware.
 
-* ``kalibr``: Kalibr/OpenVINS ``imu.yaml`` gyroscope keys from Allan documents
-  (:func:`fogbayes.export.noise.kalibr_yaml`);
-* ``ieee952``: the five IEEE 952 terms with intervals, in document units and SI
-  (:func:`fogbayes.export.noise.ieee952_document`);
-* ``px4`` / ``ardupilot``: ``TC_G*`` / ``INS_TCAL*`` parameter files from ``bias-t`` fit
-  documents or loop calibrations, one per axis in x, y, z order (:mod:`fogbayes.export.coefficients`).
-
-The unit table is ``docs/units.md``.
+``kalibr`` (:func:`fogbayes.export.noise.kalibr_yaml`), ``ieee952``
+(:func:`fogbayes.export.noise.ieee952_document`), ``px4`` / ``ardupilot`` (one per axis, x, y, z;
+:mod:`fogbayes.export.coefficients`). Units: docs/units.md.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
 """The lines ``fogbayes fit --bayes`` prints: the posterior the document holds.
 
-The least-squares line (:func:`fogbayes.cli.fit.summary_line`) says how the compensation
-did; with ``--bayes`` the user asked for the posterior, so these lines give it as the fit
-document has it: each coefficient's posterior mean with its central interval (the
-document's ``level``, 90 % by default) in the papers' raw form and units, and the
-sampler's verdict (largest R-hat, smallest effective sample size, divergences).
+Each coefficient's posterior mean and central interval (the document's ``level``) in raw form
+and units, and the sampler's verdict (largest R-hat, smallest ESS, divergences).
 """
 
 from __future__ import annotations

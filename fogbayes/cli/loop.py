@@ -1,14 +1,8 @@
-"""``fogbayes loop REC --model NAME [--json OUT] [--compensated OUT.csv] [--report OUT.html]``:
-the closed loop.
+"""``fogbayes loop REC --model NAME [--json OUT] [--compensated OUT.csv] [--report OUT.html]``: the closed loop.
 
-Fits the named model, traces what its residual holds to the candidate effects the model
-lacks, adds the one the evidence supports, refits, and repeats (at most ``--max-steps``).
-Writes the outputs asked for, and only those (at least one): with ``--json`` the
-docs/DESIGN.md JSON (before/after metrics, one entry per added effect with its evidence, and
-``unexplained`` structure), with ``--compensated`` the compensated CSV (every input row:
-``time``, ``output`` in the input unit -- or ``rate`` in deg/s for ``composite`` --,
-``outlier``), with ``--report`` an HTML report that tells the story step by step. Every
-output path is checked before the loop runs, so that they appear all or none.
+Runs :func:`fogbayes.loop.run_loop` (at most ``--max-steps``) and writes the outputs asked for
+(at least one), all or none: the docs/DESIGN.md JSON, the compensated CSV (``time``, ``output``
+or ``rate`` for ``composite``, ``outlier``), the HTML report.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""The progress line of ``fogbayes loop``: the step, the stage and the candidate tried.
+"""The progress line of ``fogbayes loop``: step (of at most ``--max-steps``), stage, candidate, elapsed time.
 
-Drawn on stderr (:data:`fogbayes.cli._common.console`) only when it is a terminal and not
-``--quiet`` (:func:`fogbayes.cli._common.shows_progress`), from the stages the loop reports
-(:mod:`fogbayes.loop.progress`). Steps are counted out of ``--max-steps``, an upper bound: the
-loop stops when no candidate is supported, which only the data decide, so no time left
-is shown -- the elapsed time is.
+Drawn on stderr only on a terminal and without ``--quiet``
+(:func:`fogbayes.cli._common.shows_progress`), from :mod:`fogbayes.loop.progress`.
 """
 
 from __future__ import annotations

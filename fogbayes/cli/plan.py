@@ -1,10 +1,8 @@
 """``fogbayes plan PILOT --term K --precision 0.10``: how long to record a static run.
 
-Thin layer over :func:`fogbayes.plan.pilot.plan_recording`: loads the pilot recording, fits
-its noise terms, and prints the record length whose GLS fit would give the term a relative
-half-width of ``--precision`` at ``--level``, with the range of lengths that the pilot's
-own uncertainty allows (docs/plan.md). ``--json`` writes the whole plan document; without it the summary
-lines are the result and go to stdout.
+Wires :func:`fogbayes.plan.pilot.plan_recording`: the length whose GLS fit gives the term a
+relative half-width of ``--precision`` at ``--level``, with the range the pilot allows
+(docs/plan.md); ``--json`` writes the plan document.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""``fogbayes prior --arw ... --bias-instability ... [--rrw ...] --json PRIOR.json``: a prior
-document from a gyro datasheet.
+"""``fogbayes prior --arw ... --bias-instability ... [--rrw ...] --json PRIOR.json``: a datasheet prior.
 
-Thin layer over :func:`fogbayes.inference.datasheet.build_prior`: converts the sheet's
-values to the canonical units (N deg/sqrt(h), B deg/h, K deg/h^1.5; the table is
-docs/priors.md) and writes the ``fogbayes.prior/1`` document that ``fogbayes allan --bayes
---prior`` and ``fogbayes loop --noise-prior`` read.
+Wires :func:`fogbayes.inference.datasheet.build_prior` (docs/priors.md): the ``fogbayes.prior/1``
+document read by ``allan --bayes --prior`` and ``loop --noise-prior``.
 """
 
 from __future__ import annotations
