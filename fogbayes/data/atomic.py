@@ -1,24 +1,10 @@
 """Write outputs so that a reader finds the old file or the new one, never half of one.
 
-Every file fogbayes writes goes through :func:`atomic_path` (or :func:`write_text`): the
-bytes go to a temporary file *in the same folder* (``.<stem>.tmp-<pid>-<random><suffix>``,
-hidden, with the final suffix so that writers which pick the format from the name --
-matplotlib, NumPy -- still do), which is flushed to disk (``fsync``) and only then renamed
-over the final name with :func:`os.replace` -- one atomic step on POSIX and Windows, as the
-rename stays inside one file system. If anything goes wrong before the rename (an
-exception, Ctrl-C, or SIGTERM, which the command line turns into an exception), the
-temporary file is removed and the final name is left as it was: the old file, or none.
-Only SIGKILL or a power cut can leave a ``.*.tmp-*`` file behind, never a truncated file
-under the final name.
-
-A command with several outputs writes them inside :func:`all_or_none`: their renames wait
-until the last is written, so that a failure on any leaves none of them.
-
-Folders (the ``--stream`` output of one ``<column>.npy`` per column) go through
-:func:`atomic_dir`: written as a whole in a temporary folder beside the target, then
-renamed into place. An existing target folder is replaced only when it holds nothing but
-``.npy`` files (an earlier output); any other content is refused before work starts
-(:func:`check_replaceable_dir`), never merged or deleted.
+:func:`atomic_path` / :func:`write_text`: written to a hidden ``.<stem>.tmp-<pid>-<random><suffix>``
+in the same folder, ``fsync``-ed, then :func:`os.replace`-d over the final name; any failure before
+(exception, Ctrl-C, SIGTERM) removes the temporary file. :func:`all_or_none` holds several outputs'
+renames until the last is written. :func:`atomic_dir` does the same for a folder of ``.npy`` files;
+an existing target is replaced only if it holds nothing else (:func:`check_replaceable_dir`).
 """
 
 from __future__ import annotations
