@@ -1,7 +1,8 @@
 """What a recording's metadata values, the loaders' arguments and its numbers may be.
 
 * metadata: :func:`meta_float` (finite, > 0), :func:`meta_text`, :func:`meta_unit` (a known
-  output unit), each error naming the file and the metadata line;
+  output unit), each error naming the file and the metadata line; a CSV ``# key:`` line
+  with no value is refused (a value forgotten, never read as "absent");
 * arguments: :func:`time_divisor` (``--time-unit``), :func:`finite`;
 * plausibility, after the Recording is built (:func:`check_plausible`; the stream applies
   :func:`check_time_step` and :func:`check_temperature` per chunk): what is numerically valid
@@ -28,11 +29,25 @@ TEMPERATURE_RANGE = (-100.0, 200.0)
 RATE_TOLERANCE = 1.5
 
 _NONE = ("", "None", "none", "null")
+#: what a value of each metadata key looks like, for the fix of a blank ``# key:`` line
+_EXAMPLES = {"unit": "deg/h", "sensor_id": "FOG-0070", "sample_rate": "10",
+             "scale_factor": "1.0", "temperatures": "temperature,temperature_2"}
+
+
+def refuse_blank(table: Table, key: str, src: str) -> None:
+    """A ``# key:`` line of a CSV file with nothing after the colon is a value forgotten,
+    not "no value": refused, naming the file and its line (other formats store no lines)."""
+    v, line = table.meta.get(key), table.meta_lines.get(key)
+    if line and isinstance(v, str) and not v.strip():
+        raise MetadataError(f"'# {key}:' has no value", file=src, line=line,
+                            fix=f"write the value, e.g. '# {key}: {_EXAMPLES.get(key, '...')}', "
+                                "or delete the line")
 
 
 # -- metadata values -------------------------------------------------------------------
 def meta_float(table: Table, key: str, src: str, *, what: str) -> float | None:
     """A metadata number that must be finite and > 0 (None when absent)."""
+    refuse_blank(table, key, src)
     v = table.meta.get(key)
     if v is None or (isinstance(v, str) and v.strip() in _NONE):
         return None
@@ -55,6 +70,7 @@ def meta_float(table: Table, key: str, src: str, *, what: str) -> float | None:
 
 def meta_text(table: Table, key: str, src: str) -> str | None:
     """A metadata string (numbers are accepted as text; lists and objects are not)."""
+    refuse_blank(table, key, src)
     v = table.meta.get(key)
     if v is None:
         return None

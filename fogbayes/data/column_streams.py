@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import FileFormatError, NonNumericError
+from ..errors import FileFormatError, MetadataError, NonNumericError
 
 PARQUET_BATCH = 1 << 20  # rows per Parquet batch (one row group at most is decoded at once)
 
@@ -98,6 +98,24 @@ class _ParquetStream:
 
 
 
+def _npz_meta(fh, src: str) -> dict:
+    """The JSON object in an NPZ's ``__meta__`` member; a pickled object is never loaded
+    (``allow_pickle=False``): a :class:`~fogbayes.errors.MetadataError` naming ``src``."""
+    from ._read import _json_meta
+
+    fix = ("store the metadata as numpy.array(json.dumps(meta)), or write the file with "
+           "fogbayes.save")
+    try:
+        arr = np.lib.format.read_array(fh, allow_pickle=False)
+    except (ValueError, EOFError, OSError) as exc:  # an object array refused, or damaged
+        raise MetadataError(f"the '__meta__' array cannot be read without unpickling "
+                            f"({str(exc).splitlines()[0] if str(exc) else type(exc).__name__})",
+                            file=src, fix=fix) from None
+    if arr.dtype.kind not in "US" or arr.shape != ():
+        raise MetadataError("the '__meta__' array is not a JSON string", file=src, fix=fix)
+    return _json_meta(str(arr[()]), src, "the '__meta__' array")
+
+
 def _scan_npz(path: Path):
     src = str(path)
     try:
@@ -110,7 +128,7 @@ def _scan_npz(path: Path):
         meta = {}
         if "__meta__" in infos:
             with zf.open(infos.pop("__meta__")) as fh:
-                meta = json.loads(str(np.lib.format.read_array(fh, allow_pickle=False)))
+                meta = _npz_meta(fh, src)
         lengths = {}
         for nm, info in infos.items():
             with zf.open(info) as fh:

@@ -27,7 +27,8 @@ import numpy as np
 from ..errors import (ArgumentError, EmptyRecordingError, FileFormatError, FogbayesError,
                       MissingColumnError, NonNumericError)
 from ._read import Table
-from .checks import check_plausible, finite, meta_float, meta_text, meta_unit, time_divisor
+from .checks import (check_plausible, finite, meta_float, meta_text, meta_unit, refuse_blank,
+                     time_divisor)
 from ._read import read_csv as _read_csv
 from ._read import read_npz as _read_npz
 from ._read import read_parquet as _read_parquet
@@ -190,6 +191,8 @@ def _recording(path: Path, table: Table, *, time, output, temperature, input_rat
     if not columns or all(len(v) == 0 for v in columns.values()):
         raise EmptyRecordingError("the file holds no data rows", file=src,
                                   fix="check the file was written completely")
+    for key in _META_KEYS:  # even where an argument overrides it: a value was forgotten
+        refuse_blank(table, key, src)
 
     def need(name: str, role: str) -> np.ndarray:
         if name not in columns:
