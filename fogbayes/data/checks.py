@@ -1,14 +1,9 @@
 """What a recording's metadata values, the loaders' arguments and its numbers may be.
 
-* metadata: :func:`meta_float` (finite, > 0), :func:`meta_text`, :func:`meta_unit` (a known
-  output unit), each error naming the file and the metadata line; a CSV ``# key:`` line
-  with no value is refused (a value forgotten, never read as "absent");
-* arguments: :func:`time_divisor` (``--time-unit``), :func:`finite`;
-* plausibility, after the Recording is built (:func:`check_plausible`; the stream applies
-  :func:`check_time_step` and :func:`check_temperature` per chunk): what is numerically valid
-  but physically implausible is refused -- a sample rate outside 1e-4 Hz ... 1 MHz (times
-  not in seconds), a temperature outside -100 ... 200 deg C (raw sensor words, kelvin), a
-  metadata sample rate that disagrees with the time stamps.
+Metadata :func:`meta_float`, :func:`meta_text`, :func:`meta_unit` (empty values refused);
+arguments :func:`time_divisor`, :func:`finite`; plausibility :func:`check_plausible`
+(:func:`check_time_step`, :func:`check_temperature`): sample rate 1e-4 Hz ... 1 MHz, temperature
+-100 ... 200 deg C, metadata sample rate consistent with the time stamps.
 """
 
 from __future__ import annotations

@@ -1,11 +1,7 @@
-"""Sequential column streams of .npy, .npz and Parquet files (read by
-:mod:`fogbayes.stream.sources` and by the unit check of :mod:`.documents`).
+"""Sequential column streams of .npy, .npz and Parquet files (for :mod:`fogbayes.stream.sources`, :mod:`.documents`).
 
-Each ``_scan_*`` reads only headers and returns ``(openers, lengths, metadata)``: per column
-a function that opens an independent stream positioned at the start of its .npy data (a
-file, a zip member, or a field of a structured array), the column lengths, and the file's
-metadata dict. ``_NpyStream.read(k)`` then returns the next ``k`` rows as float64;
-``_ParquetStream.read(k)`` re-cuts Parquet row-group batches into ``k``-row pieces.
+``_scan_*`` read headers only and return ``(openers, lengths, metadata)``; ``_NpyStream.read(k)``
+and ``_ParquetStream.read(k)`` return the next ``k`` rows as float64.
 """
 
 from __future__ import annotations

@@ -1,18 +1,9 @@
-"""Load and save Recordings as CSV, Parquet or NPZ; load gyro logs (PX4 ULog, ROS bags,
-MCAP, ArduPilot DataFlash: :mod:`fogbayes.data.logs`, docs/logs.md).
+"""Load and save Recordings as CSV, Parquet or NPZ; load gyro logs (:mod:`fogbayes.data.logs`).
 
-Column contract (docs/DESIGN.md): ``time`` (s, strictly increasing), ``output`` (gyro output in
-``unit``), ``temperature``, ``temperature_2``, ... (deg C), optional ``input_rate`` (deg/s).
-Other names are mapped with the keyword arguments of :func:`load`.
-
-CSV files may start with ``# key: value`` lines carrying metadata (``unit``,
-``sensor_id``, ``sample_rate``, ``scale_factor``); :func:`save` writes them, so a CSV
-round trip keeps everything. Numbers are written with 17 significant digits (exact).
-Parquet keeps the metadata in the schema, NPZ in a ``__meta__`` JSON string.
-
-A log is read by :func:`fogbayes.data.logs.read_log` into the same columns (``time``,
-``output`` = the body axis picked, ``temperature``; rates in rad/s) and then checked like
-a file; ``topic``, ``instance`` and ``axis`` pick the gyro and its axis.
+Columns (docs/DESIGN.md): ``time`` (s, increasing), ``output`` (``unit``), ``temperature``,
+``temperature_2``, ... (deg C), ``input_rate`` (deg/s); other names mapped by :func:`load`'s
+arguments. Metadata: CSV ``# key: value`` lines, Parquet schema, NPZ ``__meta__``; CSV numbers
+with 17 significant digits. Logs by :func:`fogbayes.data.logs.read_log` (``topic``, ``instance``, ``axis``).
 """
 
 from __future__ import annotations
