@@ -101,6 +101,8 @@ def fmt(v: Any, *, sig: int = SIG, floor: float | None = None) -> str:
         return "—" if v is None else ("yes" if v else "no")
     if isinstance(v, (int, np.integer)):
         return str(int(v))
+    if isinstance(v, str):  # an identifier such as sensor '0070' is text, never reparsed
+        return v
     try:
         f = float(v)
     except (TypeError, ValueError):
