@@ -295,3 +295,20 @@ def test_an_os_error_on_a_temporary_names_the_users_file(files, tmp_path, capsys
     assert code == 2 and len(err) == 1, err
     assert err[0].startswith(f"fogbayes: error: {out}: Permission denied"), err
     assert ".tmp-" not in err[0], err
+
+
+def test_a_pdf_printer_that_fails_is_one_line_and_leaves_nothing(files, tmp_path, capsys,
+                                                                  monkeypatch):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "chromium").write_text("#!/bin/sh\nexit 3\n")
+    (bin_dir / "chromium").chmod(0o755)
+    monkeypatch.setenv("PATH", str(bin_dir))
+    out = tmp_path / "out"
+    out.mkdir()
+    code, err = _run(["-q", "report", files / "rec.csv", "--fit", files / "allan.json",
+                      "--out", out / "r.html", "--pdf", out / "r.pdf"], capsys)
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"fogbayes: error: {out / 'r.pdf'}"), err
+    assert "exit status 3" in err[0] and "drop --pdf" in err[0], err
+    assert list(out.iterdir()) == []

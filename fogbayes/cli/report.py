@@ -108,7 +108,25 @@ def report(
             path = build_report(rec, out, model=model, fit=fit_doc, loop=loop_res,
                                 bayes=bayes, seed=seed)
         if pdf:
-            print_pdf(pending(path), pdf)  # from the HTML not yet renamed into place
+            _print(print_pdf, pending(path), pdf)  # from the HTML not yet renamed into place
     say(f"wrote {path}")
     if pdf:
         say(f"wrote {pdf}")
+
+
+def _print(print_pdf, html: Path, pdf: Path) -> None:
+    """``print_pdf`` with a failure of the browser (an exit status, a hang, a binary that
+    will not start) as one line naming --pdf: no HTML or PDF is left (all or none)."""
+    import subprocess
+
+    from ..errors import FogbayesError
+
+    try:
+        print_pdf(html, pdf)
+    except (subprocess.CalledProcessError, subprocess.TimeoutExpired, OSError) as exc:
+        why = (f"exit status {exc.returncode}" if isinstance(exc, subprocess.CalledProcessError)
+               else "no answer in 300 s" if isinstance(exc, subprocess.TimeoutExpired)
+               else exc.strerror or str(exc))
+        raise FogbayesError(f"headless Chromium could not print the report ({why})",
+                            file=str(pdf), column="--pdf",
+                            fix="drop --pdf and print the HTML from a browser") from None
