@@ -1,0 +1,79 @@
+"""Which estimator should set the loop's calibration? The same terms, three estimators.
+
+Usage::
+
+    python benchmarks/study_random_estimators.py --seeds 2 13   # dev seeds of study_random
+
+For each record of :mod:`study_random` (same draw, same measured noise) the loop runs as
+the user calls it; its final terms are then refitted on the loop's blocks by
+
+* GLS under the loop's noise model (white + flicker bank + random walk + Gauss-Markov):
+  what the loop reports;
+* GLS under the same family without the random walk;
+* least squares weighted by the blocks' sample counts;
+
+each with the IEEE 952 constant (least squares has it by construction). The error is
+study_random's: RMS of 10 s means of (model - truth), mean kept; the plain ``fogbayes fit
+-m bias-t`` is the floor. Rows go to stdout as JSON lines.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+
+import study_random as sr  # noqa: E402
+
+
+def _least_squares(ctx, terms) -> np.ndarray:
+    """Deterministic model at every sample, coefficients by count-weighted least squares."""
+    from fogbayes.diagnose.terms import design
+
+    X = ctx.block_design(list(terms))
+    w = np.sqrt(ctx.grid.count * ctx.grid.mask)
+    beta = np.linalg.lstsq(X * w[:, None], ctx.y * w, rcond=None)[0]
+    return design(list(terms), ctx.cov) @ beta
+
+
+def row(seed: int) -> dict:
+    import fogbayes  # noqa: F401
+    from fogbayes.diagnose.context import make_context
+    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop import run_loop
+    from fogbayes.loop.constant import ieee_constant
+    from fogbayes.thermal import workflow as thermal
+
+    case = sr.draw(seed)
+    rec, true_det, _ = sr.build(case)
+    res = run_loop(rec, "bias-t", seed=case["seed"] % 2**31)
+    ctx, flag = res.context, res.context.outlier
+
+    def err(det):
+        return sr._err(rec.time, det, true_det, flag)
+
+    plain = thermal.fit_recording(rec, model="bias-t")
+    no_walk = make_context(rec, random_walk=False)
+    return dict(seed=seed, family=case["family"], added=res.effects,
+                plain=err(ctx.rate - np.asarray(thermal.compensate_recording(rec, plain)["output"])),
+                gls_walk=err(ctx.rate - np.asarray(res.compensated["output"], float)),
+                gls_no_walk=err(ctx.rate - ieee_constant(no_walk, fit_terms(no_walk, res.fit.terms)).residual),
+                least_squares=err(_least_squares(ctx, res.fit.terms)))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", nargs=2, type=int, default=(2, 13), metavar=("FIRST", "STOP"))
+    a = ap.parse_args()
+    for s in range(*a.seeds):
+        print(json.dumps(row(s)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
