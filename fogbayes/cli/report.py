@@ -106,7 +106,7 @@ def report(
                                     max_steps=max(1, len(doc.get("steps", [])) or 1),
                                     seed=seed)
             path = build_report(rec, out, model=model, fit=fit_doc, loop=loop_res,
-                                bayes=bayes, seed=seed)
+                                bayes=bayes, seed=seed, fit_source=str(fit) if fit else None)
         if pdf:
             _print(print_pdf, pending(path), pdf)  # from the HTML not yet renamed into place
     say(f"wrote {path}")

@@ -65,6 +65,38 @@ def model_line(doc: dict | None) -> str:
     return str(m)
 
 
+def _same_recording(doc: dict, rec) -> bool:
+    """Whether a noise document was computed from ``rec``: the same file (resolved path), or
+    a file of the same name and sample count (the path as given may be relative)."""
+    src, here = doc.get("source"), rec.meta.source
+    if not isinstance(src, str) or not src or not here:
+        return False
+    try:
+        if Path(src).resolve() == Path(here).resolve():
+            return True
+    except (OSError, RuntimeError):
+        pass
+    return Path(src).name == Path(here).name and doc.get("n") == rec.n
+
+
+def noise_origin(doc: dict, doc_path: str | None, rec) -> str:
+    """Plain text: where the noise numbers of a document handed to the report come from.
+
+    ``"from adev.json, the noise analysis of static.csv (sensor 0070), not of this
+    recording"``; ``"from adev.json (computed from this recording)"`` when its source is
+    ``rec``'s file. A reader must never take another recording's N and B for this one's.
+    """
+    name = Path(doc_path).name if doc_path else "the noise document given"
+    if _same_recording(doc, rec):
+        return f"from {name} (computed from this recording)"
+    src = doc.get("source")
+    of = Path(src).name if isinstance(src, str) and src else "another recording"
+    sensor = doc.get("sensor_id")
+    if sensor not in (None, "") and str(sensor) != str(rec.meta.sensor_id):
+        of += f" (sensor {sensor})"
+    return f"from {name}, the noise analysis of {of}, not of this recording"
+
+
 def _cells(iv, pct: bool, role: str) -> str:
     f = fmt_pct if pct else fmt
     point = f(iv.value)

@@ -61,7 +61,8 @@ def report(rec, fit: dict | str | Path | None = None, out: str | Path = "report.
 
             validate_in_memory(doc)
     path = build_report(rec, out, model=model, fit=doc, loop=loop, bayes=bayes, seed=seed,
-                        title=title, allan=allan)
+                        title=title, allan=allan,
+                        fit_source=str(fit) if isinstance(fit, (str, Path)) else None)
     if pdf is not None:
         print_pdf(path, pdf)
     return path
@@ -87,13 +88,16 @@ def covariates(rec) -> dict[str, np.ndarray]:
 
 def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | None = None,
                  loop=None, bayes: bool = False, seed: int = 0, title: str | None = None,
-                 allan: bool = True) -> Path:
+                 allan: bool = True, fit_source: str | None = None) -> Path:
     """Write the calibration report of ``rec`` to ``out`` and return its path.
 
     Args:
         model: fit this model first (``bias-t``, ``thermal``, ``composite``, ``allan``).
         fit: a fit document already computed (``fogbayes fit --json``); wins over ``model``.
         loop: a :class:`fogbayes.loop.LoopResult` whose story is told step by step.
+        fit_source: the file ``fit`` was read from; the noise numbers of a noise document
+            are quoted with it, and with the recording they were computed from when that is
+            not ``rec`` (:func:`fogbayes.render.headline.noise_origin`).
     """
     from ..render import sections as S
     from ..render.html import write
@@ -105,7 +109,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
     from ..data.axes_doc import is_axes_document
 
     if fit is not None and is_axes_document(fit):
-        return _axes_report(rec, out, fit, title=title)
+        return _axes_report(rec, out, fit, title=title, fit_source=fit_source)
     if fit is None and model is not None:
         fit = workflow_for(model).fit_recording(rec, model=model, bayes=bayes, seed=seed)
     parts, outliers, gross, residual_rec = [], None, None, rec
@@ -126,7 +130,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
     intervals = {}
     if det is not None and "metrics" in det and residual is not None:
         intervals = _intervals(rec, residual, det)
-    parts.append(_headline(rec, det, fit, loop, intervals, residual_rec, seed))
+    parts.append(_headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source))
     parts.append(S.recording_section(rec, outliers=outliers, gross=gross, n_sigma=n_sigma))
     if det is not None:
         parts.append(S.model_section(det))
@@ -143,6 +147,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
 
         parts.append(loop_section(loop))
     allan_doc = fit if fit is not None and fit.get("model") == "allan" else None
+    given_noise = allan_doc is not None  # quoted from a document, not computed here
     if allan_doc is None and allan:
         try:
             allan_doc = workflow_for("allan").fit_recording(residual_rec, model="allan", seed=seed)
@@ -151,7 +156,9 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
                 f"No Allan analysis for this record: {exc}", ok=False))
     if allan_doc is not None:
         sec = S.noise_section(allan_doc)
-        if det is not None:
+        if given_noise:
+            sec.text(f"The noise shown is {_noise_origin(allan_doc, fit_source, rec)}.")
+        elif det is not None:
             sec.text("Computed on the residual after the fitted model, so that the thermal "
                      "drift does not hide the noise.")
         parts.append(sec)
@@ -159,7 +166,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
     return write(out, title, parts, subtitle=f"source: {rec.meta.source or 'in memory'}")
 
 
-def _axes_report(rec, out, doc: dict, *, title) -> Path:
+def _axes_report(rec, out, doc: dict, *, title, fit_source=None) -> Path:
     """A multi-axis noise document: the recording, then one noise section per axis."""
     from ..render import sections as S
     from ..render.html import write
@@ -171,6 +178,7 @@ def _axes_report(rec, out, doc: dict, *, title) -> Path:
     for name, sub in doc["axes"].items():
         sec = S.noise_section(sub)
         sec.title = f"Noise: Allan deviation, axis {name}"
+        sec.text(f"The noise shown is {_noise_origin(sub, fit_source, rec)}.")
         parts.append(sec)
     title = title or f"Noise report: {rec.meta.sensor_id}, axes {', '.join(doc['axes'])}"
     return write(out, title, parts, subtitle=f"source: {rec.meta.source or 'in memory'}")
@@ -239,7 +247,13 @@ def _intervals(rec, residual, det) -> dict:
     return out
 
 
-def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
+def _noise_origin(doc, fit_source, rec) -> str:
+    from ..render.headline import noise_origin
+
+    return noise_origin(doc, fit_source, rec)
+
+
+def _headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source=None):
     """The headline section: the model fitted, the loop, or the noise alone."""
     from ..render.headline import headline_section, improvement_verdict, model_line
 
@@ -274,7 +288,7 @@ def _headline(rec, det, fit, loop, intervals, residual_rec, seed):
         bits = [f"{k} = {_fmt(t.get('value'))} [{_fmt(t.get('low'))}, {_fmt(t.get('high'))}] "
                 f"{t.get('unit', '')}" for k, t in terms.items() if k in ("N", "B") and t]
         if bits:
-            verdict += "; " + ", ".join(bits)
+            verdict += "; " + ", ".join(bits) + f" {_noise_origin(fit, fit_source, rec)}"
     return headline_section(rec, model=model_line(fit), single=single, verdict=verdict + ".")
 
 
