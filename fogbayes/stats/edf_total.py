@@ -2,8 +2,8 @@ r"""EDF and bias factors of TOTDEV, MTOTDEV, HTOTDEV and Theo1 (NIST SP 1065 sec
 
 ``N`` phase points, averaging factor ``m``, ``alpha`` the rate-PSD exponent; a formula with no
 positive value returns NaN. TOTDEV: Table 7, :math:`\nu = b N/m - c`; PM noise uses Table 5
-(Stein). MTOTDEV/TTOTDEV: as Stable32 prints them (Greenhall's MDEV EDF for ``(N-1)/m > 100``,
-else a line in ``1/m`` fitted to its PHASE.DAT intervals; Table 8 for alpha = 2, -1, -2).
+(Stein). MTOTDEV/TTOTDEV: as Stable32 prints them (Greenhall's MDEV EDF for ``m < 10``, else a
+line in ``1/m`` fitted to its PHASE.DAT intervals; Table 8 for alpha = 2, -1, -2).
 HTOTDEV: ``(N/m)/(b0 + b1 m/N)`` for white FM, ``m >= 16``; Stein for PM; else Greenhall's
 OHDEV EDF (conservative). Theo1: Table 11 (Howe & Tasset), ``tau = 0.75 m``. Bias: Htotvar/Hvar
 (:data:`HTOTVAR_BIAS`), AVAR/Theo1 = a + b/tau^c, TOTVAR/AVAR = 1 - a tau/T.
@@ -20,10 +20,11 @@ from .edf import edf_greenhall
 TOTDEV_TABLE = {0: (1.50, 0.0), -1: (1.17, 0.22), -2: (0.93, 0.36)}
 MTOTDEV_TABLE = {2: (1.90, 2.10), 1: (1.20, 1.40), 0: (1.10, 1.20), -1: (0.85, 0.50),
                  -2: (0.75, 0.31)}
-#: (b, c) of Stable32's MTOTDEV/TTOTDEV EDF for T/tau <= 100 (module doc), alpha 0 and 1
+#: (b, c) of Stable32's MTOTDEV/TTOTDEV EDF from m = 10 on (module doc), alpha 0 and 1
 MTOTDEV_STABLE32 = {0: (1.3335, 1.894), 1: (1.7345, 2.993)}
-#: above this T/tau = (N-1)/m, Stable32 uses the MDEV EDF for MTOTDEV/TTOTDEV
-MTOTDEV_STABLE32_SWITCH = 100.0
+#: below this m, Stable32 uses the MDEV EDF for MTOTDEV/TTOTDEV (not a T/tau bound: at T/tau
+#: = 125 PHASE.DAT's m = 8 is Greenhall's, the 1 253-point Sr-87 record's m = 10 the line)
+MTOTDEV_STABLE32_SWITCH = 10
 #: (b0, b1) of the HTOTDEV EDF, white FM, m >= 16 (module doc)
 HTOTDEV_WFM = (0.559, 1.004)
 #: E[Htotvar] / Hvar per noise type (module doc); PM noise: 1
@@ -78,7 +79,7 @@ def edf_mtotdev_stable32(alpha: int, m: int, N: int) -> float:
         18.94
     """
     alpha = int(alpha)
-    if (N - 1) / m > MTOTDEV_STABLE32_SWITCH:
+    if m < MTOTDEV_STABLE32_SWITCH:
         return _positive(edf_greenhall(alpha, 2, int(m), int(N), overlapping=True,
                                        modified=True))
     if alpha in MTOTDEV_STABLE32:

@@ -8,8 +8,9 @@ subsequences, half-average slope removed, even reflection to ``9m``); ``ttotdev`
 by :data:`~fogbayes.stats.edf_total.HTOTVAR_BIAS`); ``theo1`` (:mod:`~fogbayes.stats.theo1`,
 tau = 0.75 m tau0); ``theobr`` and ``theoh`` (Theo1 times one AVAR/Theo1 factor per record,
 and its hybrid with OADEV: :mod:`~fogbayes.stats.theoh`). Noise per tau:
-:func:`~fogbayes.stats.noise_id.identify_alphas`; EDF:
-:mod:`~fogbayes.stats.edf_total`; interval :func:`~fogbayes.stats.edf.chi2_interval`. NaN is refused.
+:func:`~fogbayes.stats.noise_id.identify_alphas` (MTOTDEV, TTOTDEV, HTOTDEV below 30 cluster
+means: B1 and R(n), :mod:`~fogbayes.stats.noise_id_b1`); EDF: :mod:`~fogbayes.stats.edf_total`;
+interval :func:`~fogbayes.stats.edf.chi2_interval`. NaN is refused.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ from .allan_result import AllanDeviation
 from .edf import chi2_interval
 from .edf_total import (edf_for_total_kind, htotvar_bias_ratio, theo1_bias_ratio,
                          totvar_bias_ratio)
-from .noise_id import identify_alphas
+from .noise_id import MIN_POINTS, identify_alphas
+from .noise_id_b1 import b1_rn_alpha
 from .taus import GRIDS, TauGridError
 from .theo1 import theo1_limit, theo1_variance
 from .total_loops import mtotvar_sums, phase_samples, prefix2, totvar_sums
@@ -34,11 +36,11 @@ KINDS = ("totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh")
 _NOTES = {
     "totdev": "TOTDEV (SP 1065 eq. 25, reflected phase); EDF SP 1065 Table 7 (alpha 0..-2), "
               "Table 5 (alpha 2, 1); noise type: lag-1 ACF (oadev rules)",
-    "mtotdev": "MTOTDEV (SP 1065 eq. 27); EDF as Stable32 1.60 (MDEV EDF for T/tau > 100, "
-               "else b T/tau - c); noise type: lag-1 ACF "
-               "(mdev rules)",
+    "mtotdev": "MTOTDEV (SP 1065 eq. 27); EDF as Stable32 1.60 (MDEV EDF for m < 10, "
+               "else b T/tau - c); noise type: lag-1 ACF (mdev rules), B1 and R(n) below "
+               "30 cluster means",
     "htotdev": "HTOTDEV (SP 1065 sec. 5.2.14, detrended and reflected rate; OHDEV at m = 1); "
-               "noise type: lag-1 ACF (ohdev rules)",
+               "noise type: lag-1 ACF (ohdev rules), B1 and R(n) below 30 cluster means",
     "theo1": "Theo1 (SP 1065 eq. 30), tau = 0.75 m tau0; EDF: SP 1065 Theo1 fits; noise "
              "type: lag-1 ACF at m' = round(0.75 m)",
 }
@@ -238,6 +240,10 @@ def _one(y, ms, kind, n, ci, bias_corrected):
     else:
         rules = {"totdev": "oadev", "htotdev": "ohdev"}.get(kind, "mdev")
         alpha = identify_alphas(y, ms, kind=rules)
+        if kind in ("mtotdev", "htotdev"):  # < 30 cluster means: B1 and R(n), as Stable32
+            lo = -4 if kind == "htotdev" else -2
+            b1 = [b1_rn_alpha(y, m, lo=lo) if 3 <= n // m < MIN_POINTS else None for m in ms]
+            alpha = np.array([a if b is None else b for a, b in zip(alpha, b1)], dtype=int)
     edf = edf_for_total_kind(alpha, ms, n, kind)
     if bias_corrected:
         ratio = {"theo1": lambda: theo1_bias_ratio(alpha, ms),
