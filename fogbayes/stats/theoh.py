@@ -50,9 +50,12 @@ import numpy as np
 
 from ..errors import TooShortError
 from .allan_result import AllanDeviation
-from .edf import chi2_interval
+from .allan_blocked import allan_variance_fast
+from .edf import chi2_interval, edf_for_kind
 from .edf_total import edf_theo1
+from .noise_id import identify_alphas
 from .theo1 import theo1_limit, theo1_variance
+from .total_taus import total_grid
 
 __all__ = ["EXACT_MAX", "theobr_factor", "theobr_alpha", "theoh_switch", "theobr_deviation",
            "theoh_deviation"]
@@ -153,16 +156,22 @@ def theoh_grid(ms, n: int) -> tuple[np.ndarray, np.ndarray]:
     return allan, theo
 
 
+def _oadev_rows(y, fs: float, ms: tuple[int, ...], ci: float) -> tuple:
+    """OADEV rows of a gap-free record as :func:`fogbayes.stats.allan.allan_deviation` gives
+    them: variances, lag-1 ACF noise type, Greenhall EDF and chi-square bounds."""
+    var, count = allan_variance_fast(y, ms)
+    alpha = identify_alphas(y, ms, kind="oadev")
+    edf = edf_for_kind(alpha, ms, y.size, "oadev")
+    lo, hi = chi2_interval(var, edf, ci)
+    return np.asarray(ms) / fs, np.asarray(ms), var, count, alpha, edf, lo, hi
+
+
 def theoh_deviation(y, fs: float, allan_ms, theo_ms, *, ci: float) -> AllanDeviation:
     """TheoH rows: OADEV at ``allan_ms`` then TheoBR at ``theo_ms`` (module doc)."""
-    from .allan import allan_deviation
-
     y = np.ascontiguousarray(y, dtype=np.float64)
     parts = []
     if len(allan_ms):
-        a = allan_deviation(y, fs, taus=[int(m) for m in allan_ms], kind="oadev", ci=ci)
-        parts.append((a.tau, a.m, a.var, a.n_terms, a.alpha, a.edf, a.dev_low ** 2,
-                      a.dev_high ** 2))
+        parts.append(_oadev_rows(y, fs, tuple(int(m) for m in allan_ms), ci))
     kf = None
     if len(theo_ms):
         theo_ms = np.asarray(theo_ms, dtype=np.int64)
@@ -182,8 +191,6 @@ def theo_family(y, fs: float, taus, kind: str, *, ci: float, m_max: int | None,
     """``theobr`` or ``theoh`` of finite rate data ``y`` ((n,) or (batch, n), row by row) on a
     named grid or explicit averaging factors (``theobr``: even m, the Theo1 grid; ``theoh``:
     the TOTDEV grid below ``m_k``, the Theo1 grid from ``m_k`` on, :func:`theoh_grid`)."""
-    from .total import total_grid
-
     n = y.shape[-1]
     if kind == "theobr":
         ms = np.asarray(total_grid(n, taus, "theo1", m_max=m_max, per_decade=per_decade))

@@ -26,8 +26,8 @@ from .edf_total import (edf_for_total_kind, htotvar_bias_ratio, theo1_bias_ratio
                          totvar_bias_ratio)
 from .noise_id import MIN_POINTS, identify_alphas
 from .noise_id_b1 import b1_rn_alpha
-from .taus import GRIDS, TauGridError
-from .theo1 import theo1_limit, theo1_variance
+from .total_taus import total_grid, total_limits
+from .theo1 import theo1_variance
 from .total_loops import mtotvar_sums, phase_samples, prefix2, totvar_sums
 
 __all__ = ["KINDS", "total_deviation", "total_grid", "total_variance"]
@@ -46,59 +46,6 @@ _NOTES = {
 }
 
 
-def _limits(n: int, kind: str) -> tuple[int, int]:
-    """(largest valid m, default top of a named grid) for ``n`` rate samples."""
-    N = n + 1
-    if kind == "totdev":
-        return n, N // 2
-    if kind == "mtotdev":
-        return N // 3, N // 3
-    if kind == "htotdev":
-        return n // 3, n // 3
-    top = theo1_limit(n)
-    return top, top
-
-
-def total_grid(n: int, taus="octave", kind: str = "totdev", *, m_max: int | None = None,
-               per_decade: int = 20) -> tuple[int, ...]:
-    """Averaging factors for ``n`` rate samples (module doc); Theo1 keeps even m only."""
-    kind = "mtotdev" if kind == "ttotdev" else kind
-    limit, top = _limits(n, kind)
-    lo = 2 if kind == "theo1" else 1
-    if not isinstance(taus, str):
-        ms = np.unique(np.asarray(taus, dtype=np.int64).reshape(-1))
-        if ms.size == 0 or ms[0] < lo or ms[-1] > limit or (kind == "theo1" and (ms % 2).any()):
-            what = "even averaging factors in" if kind == "theo1" else "averaging factors in"
-            raise TooShortError(f"{kind} needs {what} {lo}..{limit} for {n} samples",
-                                column="taus", fix="pass smaller cluster sizes (samples, not s)")
-        return tuple(int(m) for m in ms)
-    top = min(top if m_max is None else int(m_max), limit)
-    if top < lo:
-        raise TooShortError(f"no {kind} averaging factor lies in {lo}..{top} ({n} samples)",
-                            fix="record longer or raise m_max")
-    if taus == "octave":
-        ms = 2 ** np.arange(math.floor(math.log2(top)) + 1)
-    elif taus == "decade":
-        dec = 10 ** np.arange(math.floor(math.log10(top)) + 1)
-        ms = np.concatenate([dec, 2 * dec, 4 * dec])
-    elif taus == "dense":
-        if int(per_decade) < 1:
-            raise TauGridError(f"per_decade must be >= 1, got {per_decade}",
-                               fix="pass per_decade=20 (or another positive integer)")
-        k = np.arange(math.ceil(math.log10(top) * per_decade) + 1)
-        ms = np.round(10.0 ** (k / per_decade))
-        if kind == "theo1":
-            ms = 2 * np.round(ms / 2)
-    elif taus == "all":
-        ms = np.arange(lo, top + 1, 2 if kind == "theo1" else 1)
-    else:
-        raise TauGridError(f"unknown tau grid '{taus}'", column="taus",
-                           fix=f"use one of {', '.join(GRIDS)} or explicit cluster sizes")
-    ms = np.unique(ms.astype(np.int64))
-    keep = (ms >= lo) & (ms <= top) & ((ms % 2 == 0) if kind == "theo1" else True)
-    return tuple(int(m) for m in ms[keep])
-
-
 def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
     """``(var, count)`` of ``kind`` (totdev, mtotdev, theo1) at averaging factors ``ms``;
     the variance is in the unit of ``y`` squared (module doc; ``y`` 1-D and finite)."""
@@ -110,7 +57,7 @@ def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
         raise FogbayesError(f"total_variance takes 1-D data and totdev, mtotdev or theo1, got "
                             f"'{kind}' and shape {y.shape}", fix="pass one sensor as (n,)")
     N = y.size + 1
-    limit = _limits(y.size, kind)[0]
+    limit = total_limits(y.size, kind)[0]
     if ms.size == 0 or ms.min() < 1 or ms.max() > limit:
         raise TooShortError(f"{kind} needs averaging factors in 1..{limit} for {y.size} "
                             f"samples, got {ms.tolist()}", column="taus",
