@@ -2,8 +2,9 @@
 
 Every error a user can cause by handing fogbayes a bad file or a bad argument is a
 subclass of :class:`FogbayesError`, itself a :class:`ValueError`. The message names the
-file, the column and the row where known, and says how to fix the problem; the command
-line prints it as one line on stderr and exits with code 2.
+file, the place in it (a table's column and row, a JSON document's field) or the
+command-line option where known, and says how to fix the problem; the command line prints
+it as one line on stderr and exits with code 2.
 """
 
 from __future__ import annotations
@@ -16,7 +17,11 @@ class FogbayesError(ValueError):
 
     Attributes:
         file: the file the problem is in (None for in-memory data).
-        column: the column concerned, if any.
+        column: the name concerned, if any: a column of a table, or, given as ``field=`` or
+            ``flag=``, a document field or a command-line option (a name starting with
+            ``-`` is an option whichever keyword brought it).
+        kind: what ``column`` names, as the message says it: ``"column"``, ``"field"`` (a
+            key of a JSON document or of metadata, dotted path) or ``"option"``.
         row: 0-based data row (the first row after the header is row 0), if any.
         fix: one sentence saying how to fix it.
         line: the 1-based physical line of the file (CSV: counting the ``# key: value``
@@ -32,10 +37,14 @@ class FogbayesError(ValueError):
         row: int | None = None,
         fix: str | None = None,
         line: int | None = None,
+        field: str | None = None,
+        flag: str | None = None,
     ):
         self.problem = problem
         self.file = file
-        self.column = column
+        self.column = column if column is not None else (field if field is not None else flag)
+        self.kind = ("option" if flag is not None or str(self.column).startswith("-")
+                     else "field" if field is not None else "column")
         self.row = row
         self.fix = fix
         self.line = line
@@ -46,7 +55,7 @@ class FogbayesError(ValueError):
         if self.file is not None:
             where.append(f"{self.file}")
         if self.column is not None:
-            where.append(f"column '{self.column}'")
+            where.append(f"{self.kind} '{self.column}'")
         if self.row is not None:
             # the physical line (1-based, every line counted: metadata, header, blank lines)
             # is known only where the row was read from a text file; see ``located``

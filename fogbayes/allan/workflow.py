@@ -215,5 +215,5 @@ def compensate_recording(rec, fit: dict) -> dict:
     """An Allan model describes random noise: there is nothing to subtract."""
     raise FogbayesError(
         "an Allan (noise) model has nothing to compensate: it describes random noise, "
-        "not a deterministic error", column="model",
+        "not a deterministic error", field="model",
         fix="compensate with a bias-t, thermal or composite fit (fogbayes fit --model thermal)")

@@ -249,9 +249,9 @@ def compensate(
         raise FogbayesError("--run-events applies to loop documents only", column="--run-events",
                             fix="drop --run-events with a fit document")
     wf = workflow_for(str(fit_doc["model"]))
-    if getattr(wf, "compensate_recording", None) is None:
+    if getattr(wf, "compensate_recording", None) is None or fit_doc["model"] == "allan":
         raise FogbayesError(f"model '{fit_doc['model']}' describes noise: there is nothing to "
-                            "compensate", file=str(params), column="model",
+                            "compensate", file=str(params), field="model",
                             fix="compensate with a bias-t, thermal or composite fit")
     given = fit_doc.get("input") or {}
     unit = agreed_unit(fit_doc, str(params), rec, output_unit)  # file, document, option agree

@@ -32,7 +32,7 @@ def _ordered(paths: list[Path]) -> list[tuple[dict, str]]:
     if any(n is None for n in names) or sorted(names) != list("xyz"[:len(names)]):
         raise ExportError(f"the firmware takes the gyro axes as x, y, z; the documents hold "
                           f"axes {[n or '(unnamed)' for n in names]}", file=str(paths[0]),
-                          column="axes", fix="fit the axes x, y, z (or x, or x and y) into one "
+                          field="axes", fix="fit the axes x, y, z (or x, or x and y) into one "
                                              "document ('fogbayes fit LOG --axis all'), or pass "
                                              "one plain document per axis in x, y, z order")
     return [(doc, where) for n in "xyz"[:len(names)] for m, doc, where in named if m == n]
@@ -57,13 +57,13 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None, list[str
             continue
         if doc.get("model") != "bias-t":
             raise ExportError(f"firmware thermal parameters come from a bias-t fit, this is a "
-                              f"{doc.get('model')!r} document", file=p, column="model",
+                              f"{doc.get('model')!r} document", file=p, field="model",
                               fix="run 'fogbayes fit REC --model bias-t --orders 3' (temperature only)")
         params = doc["params"]
         unit = (params.get("units") or {}).get("output", "deg/h")
         if unit != "deg/h":
             raise FogbayesError(f"the fit's output unit is {unit!r}, the export needs deg/h",
-                                file=p, column="params.units.output",
+                                file=p, field="params.units.output",
                                 fix="run 'fogbayes fit' with --output-unit set to the recording's rate unit")
         axes.append((basis_from_dict(params["basis"], source=p), params["coef"]))
         spans.append((params.get("valid_range") or {}).get("T"))

@@ -109,24 +109,24 @@ def validate_axes_document(doc: dict, source: str | None = None) -> dict:
     :mod:`fogbayes.data.axes_doc`); returns ``doc``."""
     if doc.get("schema") != AXES_SCHEMA:
         raise FitDocumentError(f"schema {doc.get('schema')!r} is not one this fogbayes reads "
-                               f"({AXES_SCHEMA})", file=source, column="schema",
+                               f"({AXES_SCHEMA})", file=source, key="schema",
                                fix="upgrade fogbayes, or write the document again")
     unknown = sorted(set(doc) - AXES_KEYS)
     if unknown:
         raise FitDocumentError(f"unknown key {unknown[0]!r} in a multi-axis document",
-                               file=source, column=unknown[0],
+                               file=source, key=unknown[0],
                                fix="pass the document fogbayes wrote, unchanged")
     axes = doc.get("axes")
     if not isinstance(axes, dict) or not axes:
         raise FitDocumentError("'axes' must map each axis name to its fit document",
-                               file=source, column="axes",
+                               file=source, key="axes",
                                fix="pass the document fogbayes wrote, unchanged")
     for name, sub in axes.items():
         validate_fit_document(sub, f"{source}[axes.{name}]")
         if sub.get("model") != doc.get("model"):
             raise FitDocumentError(f"axis {name!r} holds a {sub.get('model')!r} fit in a "
                                    f"{doc.get('model')!r} document", file=source,
-                                   column=f"axes.{name}.model",
+                                   key=f"axes.{name}.model",
                                    fix="pass the document fogbayes wrote, unchanged")
     return doc
 

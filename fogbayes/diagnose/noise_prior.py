@@ -101,7 +101,7 @@ def _number(value, key: str, source: str, what: str) -> float:
         x = math.nan
     if not math.isfinite(x) or x < 0.0:
         raise FogbayesError(f"{key} = {value!r} is not a finite non-negative {what}",
-                            file=source, column=key, fix=HOW)
+                            file=source, field=key, fix=HOW)
     return x
 
 
@@ -122,12 +122,12 @@ def prior_from_doc(doc, *, source: str = "given") -> NoisePrior:
     except (KeyError, TypeError):
         raise FogbayesError("the noise prior has no random-walk bound "
                             "(neither fit.terms.K.high nor K)", file=source,
-                            column="K", fix=HOW) from None
+                            field="K", fix=HOW) from None
     k = _number(k_value, "fit.terms.K.high", source, "K in deg/h^1.5")
     tau, high = doc.get("tau"), doc.get("adev_high")
     if not tau or not high or len(tau) != len(high):
         raise FogbayesError("the Allan document has no tau / adev_high band of the same "
-                            "length", file=source, column="adev_high", fix=HOW)
+                            "length", file=source, field="adev_high", fix=HOW)
     return NoisePrior(k, tuple(_number(t, "tau", source, "tau in s") for t in tau),
                       tuple(_number(h, "adev_high", source, "ADEV in deg/h") for h in high),
                       source)
@@ -143,7 +143,7 @@ def _from_datasheet(doc: dict, source: str) -> NoisePrior:
         given = ", ".join(sheet.terms)
         raise FogbayesError(
             f"the datasheet prior gives no rate random walk (terms: {given}), so it sets no "
-            "cap on the walk", file=source, column="terms.K",
+            "cap on the walk", file=source, field="terms.K",
             fix="add the sheet's RRW ('fogbayes prior ... --rrw VALUE --rrw-unit UNIT'), "
                 "or pass a static run's 'fogbayes allan --json' document, or leave "
                 "--noise-prior out")

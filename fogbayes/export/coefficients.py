@@ -40,7 +40,7 @@ def basis_from_dict(d: dict, *, source: str | None = None) -> PolyBasis:
                          tuple(float(x) for x in d["centre"]), tuple(float(x) for x in d["scale"]))
     except (KeyError, TypeError, ValueError) as exc:
         raise ExportError(f"the fit document's basis is malformed ({exc!r})", file=source,
-                          column="params.basis",
+                          field="params.basis",
                           fix="pass a document written by 'fogbayes fit'") from None
 
 
@@ -175,14 +175,14 @@ def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis,
             p = t["params"]
             if where is not None and where != (p["centre"], p["scale"]):
                 raise ExportError("the calibration's temperature terms use different "
-                                  "centres/scales", file=source, column="calibration.terms")
+                                  "centres/scales", file=source, field="calibration.terms")
             where = (p["centre"], p["scale"])
             powers.extend(p["powers"])
             coef.extend(c)
         else:
             raise ExportError(f"PX4 and ArduPilot compensate with a polynomial in one temperature; the "
                               f"calibration has the term {t['effect']!r} ({t['kind']}), which "
-                              f"the firmware has no input for", file=source, column="model",
+                              f"the firmware has no input for", file=source, field="model",
                               fix="export a loop run without that effect, or apply the "
                                   "calibration with 'fogbayes compensate'")
     centre, scale = where if where is not None else (0.0, 1.0)

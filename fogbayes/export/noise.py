@@ -29,14 +29,14 @@ def _terms(doc: dict, source: str | None) -> dict:
     if not isinstance(doc, dict) or doc.get("model") != "allan":
         raise NoiseExportError("not an Allan document (its 'model' is "
                                f"{doc.get('model') if isinstance(doc, dict) else None!r})",
-                               file=source, column="model",
+                               file=source, field="model",
                                fix="pass the document of 'fogbayes allan --json'")
     terms = (doc.get("fit") or {}).get("terms") or {}
     for t, unit in DOC_UNITS.items():
         e = terms.get(t)
         if e is not None and e.get("unit") != unit:
             raise NoiseExportError(f"term {t} is in {e.get('unit')!r}, expected {unit!r}",
-                                   file=source, column=f"fit.terms.{t}.unit",
+                                   file=source, field=f"fit.terms.{t}.unit",
                                    fix="write the document again with this fogbayes")
     return terms
 
@@ -90,12 +90,12 @@ def kalibr_yaml(docs: list[tuple[dict, str | None]], *, quantile: float = 0.5,
         for t in ("N", "K"):
             if terms.get(t) is None:
                 raise NoiseExportError(f"the document has no {t} term", file=src,
-                                       column=f"fit.terms.{t}", fix="fit the five-term model")
+                                       field=f"fit.terms.{t}", fix="fit the five-term model")
             if not terms[t][key] > 0:  # a filter told "no noise" trusts its model forever
                 raise NoiseExportError(
                     f"{t} is {terms[t][key]:g} at quantile {quantile:g}: the data do not "
                     f"resolve {t} (its interval reaches 0), and a filter given 0 would never "
-                    "doubt its model", file=src, column=f"fit.terms.{t}",
+                    "doubt its model", file=src, field=f"fit.terms.{t}",
                     fix="use --quantile 0.5 (the estimate) or the interval's upper end")
         unresolved = [t for t in ("N", "K") if not terms[t].get("present", True)]
         rows.append((src, float(doc["fs"]), terms["N"][key] * TO_SI["N"][0],
@@ -104,7 +104,7 @@ def kalibr_yaml(docs: list[tuple[dict, str | None]], *, quantile: float = 0.5,
         if fs != rows[0][1]:
             raise NoiseExportError(f"the axes were recorded at different rates ({rows[0][1]:g} "
                                    f"Hz in {rows[0][0]}, {fs:g} Hz here)", file=src,
-                                   column="fs", fix="export each sensor alone")
+                                   field="fs", fix="export each sensor alone")
     n_max, k_max = max(r[2] for r in rows), max(r[3] for r in rows)
     what = {"value": "the estimate (quantile 0.5)", "low": f"quantile {quantile:g}",
             "high": f"quantile {quantile:g}"}[key]

@@ -106,7 +106,7 @@ def _positive(value, key: str, file: str | None = None) -> float:
     except (TypeError, ValueError):
         x = math.nan
     if isinstance(value, bool) or not math.isfinite(x) or x <= 0.0:
-        raise PriorError(f"{value!r} is not a finite positive number", file=file, column=key,
+        raise PriorError(f"{value!r} is not a finite positive number", file=file, field=key,
                          fix="give the datasheet value as a positive number")
     return x
 
@@ -118,7 +118,7 @@ def _looseness(value, key: str, file: str | None = None) -> float:
         x = math.nan
     if isinstance(value, bool) or not math.isfinite(x) or x <= 1.0:
         raise PriorError(f"looseness {value!r} must be a finite number > 1", file=file,
-                         column=key, fix="give e.g. 3: the true value lies within a factor 3 "
+                         field=key, fix="give e.g. 3: the true value lies within a factor 3 "
                                          "of the sheet's with 90 % prior probability")
     return x
 
@@ -236,35 +236,35 @@ def validate_prior(doc, source: str = "given") -> DatasheetPrior:
     refuse_other_kind(doc, source, ("datasheet prior document", {"prior"}, HOW), error=PriorError)
     schema = doc.get("schema")
     if not is_prior_document(doc):
-        raise PriorError(f"schema {schema!r} is not {SCHEMA!r}", file=source, column="schema",
+        raise PriorError(f"schema {schema!r} is not {SCHEMA!r}", file=source, field="schema",
                          fix=HOW)
     version = schema.split("/", 1)[1]
     if not version.isdigit() or int(version) > SCHEMA_VERSION:
         raise PriorError(f"schema {schema!r} is newer than this fogbayes reads ({SCHEMA})",
-                         file=source, column="schema",
+                         file=source, field="schema",
                          fix="update fogbayes, or write the prior again with this version's "
                              "'fogbayes prior'")
     sensor = doc.get("sensor")
     if sensor is not None and not isinstance(sensor, str):
-        raise PriorError("sensor is not a string", file=source, column="sensor",
+        raise PriorError("sensor is not a string", file=source, field="sensor",
                          fix="give the sensor's name as a string, or null")
     raw = doc.get("terms")
     if not isinstance(raw, dict) or not raw:
         raise PriorError("no terms (an object of N, B, K ... entries)", file=source,
-                         column="terms", fix=HOW)
+                         field="terms", fix=HOW)
     terms = {}
     for t, entry in raw.items():
         key = f"terms.{t}"
         if t not in TERMS:
-            raise PriorError(f"{t!r} is not a noise term", file=source, column=key,
+            raise PriorError(f"{t!r} is not a noise term", file=source, field=key,
                              fix="use the canonical names Q, N (ARW), B (bias instability), "
                                  "K (RRW), R")
         if not isinstance(entry, dict):
             raise PriorError("is not an object with value, unit and looseness", file=source,
-                             column=key, fix=HOW)
+                             field=key, fix=HOW)
         if entry.get("unit") != UNITS[t]:
             raise PriorError(f"unit {entry.get('unit')!r} is not {t}'s canonical unit "
-                             f"{UNITS[t]!r}", file=source, column=f"{key}.unit",
+                             f"{UNITS[t]!r}", file=source, field=f"{key}.unit",
                              fix=f"give the value in {UNITS[t]}, or {HOW}")
         value = _positive(entry.get("value"), f"{key}.value", source)
         loose = _looseness(entry.get("looseness"), f"{key}.looseness", source)
