@@ -86,3 +86,11 @@ def test_multi_axis_document_of_another_version_is_one_line(static, capsys, tmp_
     ax.write_text(json.dumps({"schema": "fogbayes.axes/2", "model": "allan", "axes": {}}))
     rc, err = run(capsys, "compensate", static / "s.csv", "-p", ax, "-o", tmp_path / "c.csv")
     assert rc == 2 and str(ax) in err and "'schema'" in err and "fogbayes.axes/1" in err
+
+
+@pytest.mark.parametrize("command", [["fit", "--json", "f.json"], ["loop", "--report", "l.html"]])
+def test_unknown_model_names_the_option(static, capsys, tmp_path, command):
+    """``-m foo`` is the --model option, not a column of the recording."""
+    rc, err = run(capsys, command[0], static / "s.csv", "-m", "foo", command[1],
+                  tmp_path / command[2])
+    assert rc == 2 and "option '--model': unknown model 'foo'" in err

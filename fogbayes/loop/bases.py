@@ -75,7 +75,7 @@ def parse_orders(model: str, orders: str | None) -> tuple[int, ...]:
 def base_terms(ctx: Context, model: str, orders: str | None = None, *, source=None) -> list[Term]:
     """The term list of base ``model`` on this recording."""
     if model not in MODELS:
-        raise ModelNameError(f"unknown model '{model}'", column="model",
+        raise ModelNameError(f"unknown model '{model}'", flag="--model",
                              fix=f"use one of {', '.join(MODELS)}")
     o = parse_orders(model, orders)
     terms = [Term("intercept", {"effect": "base"})]

@@ -21,6 +21,6 @@ MODULES = {"bias-t": "..thermal.workflow", "thermal": "..thermal.workflow", "com
 def workflow_for(model: str) -> ModuleType:
     """The workflow module that fits and compensates ``model``."""
     if model not in MODULES:
-        raise FogbayesError(f"unknown model '{model}'", column="model",
+        raise FogbayesError(f"unknown model '{model}'", flag="--model",
                             fix=f"use one of {', '.join(MODULES)}")
     return importlib.import_module(MODULES[model], __name__)
