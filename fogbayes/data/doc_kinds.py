@@ -29,7 +29,9 @@ _FIT = {"bias-t": DocKind("fit", "bias-t fit document", "fogbayes fit --json"),
 #: other schemas: name before the slash -> kind
 _SCHEMAS = {
     "fogbayes.loop": DocKind("loop", "loop calibration document", "fogbayes loop --json"),
-    "fogbayes.axes": DocKind("axes", "multi-axis document", "fogbayes allan --axis all --json"),
+    "fogbayes.axes": DocKind("axes", "multi-axis document",
+                             "fogbayes fit --axis all --json' or 'fogbayes allan --axis all "
+                             "--json"),  # describe() quotes it: two commands
     "fogbayes.pool": DocKind("pool", "pooled noise document", "fogbayes pool --json"),
     "fogbayes.plan": DocKind("plan", "test plan", "fogbayes plan --json"),
     "fogbayes.plan_chamber": DocKind("plan_chamber", "chamber programme plan",
