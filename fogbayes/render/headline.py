@@ -65,9 +65,18 @@ def model_line(doc: dict | None) -> str:
     return str(m)
 
 
+def _input(doc: dict) -> dict:
+    """Where a document says it was computed: a noise document's ``source``, ``n`` and
+    ``sensor_id``, or a fit document's ``input`` block (the same keys)."""
+    if "source" not in doc and isinstance(doc.get("input"), dict):
+        return doc["input"]
+    return doc
+
+
 def _same_recording(doc: dict, rec) -> bool:
-    """Whether a noise document was computed from ``rec``: the same file (resolved path), or
-    a file of the same name and sample count (the path as given may be relative)."""
+    """Whether a document was computed from ``rec``: the same file (resolved path), or a
+    file of the same name and sample count (the path as given may be relative)."""
+    doc = _input(doc)
     src, here = doc.get("source"), rec.meta.source
     if not isinstance(src, str) or not src or not here:
         return False
@@ -79,22 +88,25 @@ def _same_recording(doc: dict, rec) -> bool:
     return Path(src).name == Path(here).name and doc.get("n") == rec.n
 
 
-def noise_origin(doc: dict, doc_path: str | None, rec) -> str:
-    """Plain text: where the noise numbers of a document handed to the report come from.
+def noise_origin(doc: dict, doc_path: str | None, rec,
+                 what: str = "noise analysis") -> str | None:
+    """Plain text: where the numbers of a document handed to the report come from, when
+    that is not ``rec`` itself (None when it is: the numbers are this recording's).
 
     ``"from adev.json, the noise analysis of static.csv (sensor 0070), not of this
-    recording"``; ``"from adev.json (computed from this recording)"`` when its source is
-    ``rec``'s file. A reader must never take another recording's N and B for this one's.
+    recording"``; ``what="fit"`` for a fit document's coefficients. A reader must never
+    take another recording's N and B, or another run's fit, for this one's.
     """
-    name = Path(doc_path).name if doc_path else "the noise document given"
     if _same_recording(doc, rec):
-        return f"from {name} (computed from this recording)"
+        return None
+    name = Path(doc_path).name if doc_path else f"the {what} document given"
+    doc = _input(doc)
     src = doc.get("source")
     of = Path(src).name if isinstance(src, str) and src else "another recording"
     sensor = doc.get("sensor_id")
     if sensor not in (None, "") and str(sensor) != str(rec.meta.sensor_id):
         of += f" (sensor {sensor})"
-    return f"from {name}, the noise analysis of {of}, not of this recording"
+    return f"from {name}, the {what} of {of}, not of this recording"
 
 
 def _cells(iv, pct: bool, role: str) -> str:

@@ -110,6 +110,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
 
     if fit is not None and is_axes_document(fit):
         return _axes_report(rec, out, fit, title=title, fit_source=fit_source)
+    given = fit is not None  # a document handed in (not fitted here): its origin is named
     if fit is None and model is not None:
         fit = workflow_for(model).fit_recording(rec, model=model, bayes=bayes, seed=seed)
     parts, outliers, gross, residual_rec = [], None, None, rec
@@ -130,7 +131,8 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
     intervals = {}
     if det is not None and "metrics" in det and residual is not None:
         intervals = _intervals(rec, residual, det)
-    parts.append(_headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source))
+    parts.append(_headline(rec, det, fit, loop, intervals, residual_rec, seed,
+                           fit_source if given else None, given))
     parts.append(S.recording_section(rec, outliers=outliers, gross=gross, n_sigma=n_sigma))
     if det is not None:
         parts.append(S.model_section(det))
@@ -147,7 +149,7 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
 
         parts.append(loop_section(loop))
     allan_doc = fit if fit is not None and fit.get("model") == "allan" else None
-    given_noise = allan_doc is not None  # quoted from a document, not computed here
+    given_noise = given and allan_doc is not None  # quoted from a document
     if allan_doc is None and allan:
         try:
             allan_doc = workflow_for("allan").fit_recording(residual_rec, model="allan", seed=seed)
@@ -156,8 +158,9 @@ def build_report(rec, out: str | Path, *, model: str | None = None, fit: dict | 
                 f"No Allan analysis for this record: {exc}", ok=False))
     if allan_doc is not None:
         sec = S.noise_section(allan_doc)
-        if given_noise:
-            sec.text(f"The noise shown is {_noise_origin(allan_doc, fit_source, rec)}.")
+        origin = _noise_origin(allan_doc, fit_source, rec) if given_noise else None
+        if origin:
+            sec.text(f"The noise shown is {origin}.")
         elif det is not None:
             sec.text("Computed on the residual after the fitted model, so that the thermal "
                      "drift does not hide the noise.")
@@ -178,7 +181,9 @@ def _axes_report(rec, out, doc: dict, *, title, fit_source=None) -> Path:
     for name, sub in doc["axes"].items():
         sec = S.noise_section(sub)
         sec.title = f"Noise: Allan deviation, axis {name}"
-        sec.text(f"The noise shown is {_noise_origin(sub, fit_source, rec)}.")
+        origin = _noise_origin(sub, fit_source, rec)
+        if origin:
+            sec.text(f"The noise shown is {origin}.")
         parts.append(sec)
     title = title or f"Noise report: {rec.meta.sensor_id}, axes {', '.join(doc['axes'])}"
     return write(out, title, parts, subtitle=f"source: {rec.meta.source or 'in memory'}")
@@ -247,15 +252,22 @@ def _intervals(rec, residual, det) -> dict:
     return out
 
 
-def _noise_origin(doc, fit_source, rec) -> str:
+def _noise_origin(doc, fit_source, rec, what: str = "noise analysis") -> str | None:
     from ..render.headline import noise_origin
 
-    return noise_origin(doc, fit_source, rec)
+    return noise_origin(doc, fit_source, rec, what)
 
 
-def _headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source=None):
-    """The headline section: the model fitted, the loop, or the noise alone."""
-    from ..render.headline import headline_section, improvement_verdict, model_line
+def _headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source=None,
+              given=False):
+    """The headline section: the model fitted, the loop, or the noise alone; a document
+    handed in (``given``) is named with the recording it was fitted on."""
+    from ..render.headline import headline_section, improvement_verdict
+    from ..render.headline import model_line as _line
+
+    def model_line(doc):
+        origin = _noise_origin(doc, fit_source, rec, "fit") if given and doc is det else None
+        return f"{_line(doc)}; {origin}" if origin else _line(doc)
 
     if det is not None and intervals:
         si = intervals[min(intervals)]
@@ -271,7 +283,7 @@ def _headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source=Non
                                 "for a bias stability with an interval (fewer than three "
                                 "1 s windows).", ok=False)
     if det is not None:  # composite: the relative rate error of the calibration table
-        return _composite_headline(rec, det)
+        return _composite_headline(rec, det, model_line(det))
     if loop is not None:
         from ..render.loop import loop_headline
 
@@ -288,7 +300,10 @@ def _headline(rec, det, fit, loop, intervals, residual_rec, seed, fit_source=Non
         bits = [f"{k} = {_fmt(t.get('value'))} [{_fmt(t.get('low'))}, {_fmt(t.get('high'))}] "
                 f"{t.get('unit', '')}" for k, t in terms.items() if k in ("N", "B") and t]
         if bits:
-            verdict += "; " + ", ".join(bits) + f" {_noise_origin(fit, fit_source, rec)}"
+            verdict += "; " + ", ".join(bits)
+            origin = _noise_origin(fit, fit_source, rec) if given else None
+            if origin:
+                verdict += f" {origin}"
     return headline_section(rec, model=model_line(fit), single=single, verdict=verdict + ".")
 
 
@@ -298,15 +313,15 @@ def _fmt(v):
     return fmt(v)
 
 
-def _composite_headline(rec, det):
+def _composite_headline(rec, det, model: str):
     from ..render.composite import error_verdict
-    from ..render.headline import headline_section, model_line
+    from ..render.headline import headline_section
 
     table = det.get("table")
     verdict, ok = "", None
     if isinstance(table, list) and table and "before_error_pct" in table[0]:
         verdict, ok = error_verdict(table)
-    return headline_section(rec, model=model_line(det), verdict=verdict or
+    return headline_section(rec, model=model, verdict=verdict or
                             "see the model section for the calibrated coefficients.", ok=ok)
 
 
