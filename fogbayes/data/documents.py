@@ -2,7 +2,8 @@
 
 Documents carry ``"schema": "fogbayes.fit/1"``; readers go through :func:`read_fit_document` /
 :func:`validate_fit_document`, which raise a :class:`FitDocumentError` naming document and key
-path for: another or newer schema, a loop document, depth beyond :data:`MAX_DEPTH`, NaN/inf,
+path for: another or newer schema, a loop document or another kind fogbayes writes (named for
+what it is, :mod:`~fogbayes.data.doc_kinds`), depth beyond :data:`MAX_DEPTH`, NaN/inf,
 unknown model or keys, missing keys, wrong types, and each model's shapes and ranges (shared
 rules :mod:`~fogbayes.data.doc_models`, bounds :mod:`~fogbayes.data.doc_rules`, family rules
 :data:`MODEL_CHECKS`).
