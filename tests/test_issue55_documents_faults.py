@@ -106,3 +106,27 @@ def test_npz_meta_not_json_streamed_is_one_line(tmp_path, capsys, fit_doc):
              __meta__=np.array('{"unit": "deg/h"'))
     rc, err = run(capsys, "compensate", f, "-p", fit_doc, "-o", tmp_path / "c.npz", "--stream")
     assert rc == 2 and str(f) in one_line(err) and "not JSON" in err
+
+
+def test_stream_metadata_not_an_object_is_one_line(tmp_path, capsys, fit_doc):
+    """The streaming readers check metadata as the loaders do: a meta.json of a .npy folder
+    that is a list, Parquet schema metadata that is not JSON."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    rec = simulate("thermal", duration=600.0, fs=1.0, seed=2).recording
+    folder = tmp_path / "npy"
+    folder.mkdir()
+    for name, col in (("time", rec.time), ("output", rec.output),
+                      ("temperature", rec.temperatures[:, 0])):
+        np.save(folder / f"{name}.npy", col)
+    (folder / "meta.json").write_text("[1, 2]")
+    rc, err = run(capsys, "compensate", folder, "-p", fit_doc, "-o", tmp_path / "c.npz",
+                  "--stream")
+    assert rc == 2 and "meta.json" in one_line(err) and "not an object" in err
+    table = pa.table({"time": rec.time, "output": rec.output,
+                      "temperature": rec.temperatures[:, 0]})
+    pq.write_table(table.replace_schema_metadata({b"fogbayes": b"[1"}), tmp_path / "m.parquet")
+    rc, err = run(capsys, "compensate", tmp_path / "m.parquet", "-p", fit_doc, "-o",
+                  tmp_path / "c.parquet", "--stream")
+    assert rc == 2 and str(tmp_path / "m.parquet") in one_line(err) and "not JSON" in err

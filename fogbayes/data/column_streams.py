@@ -6,7 +6,6 @@ and ``_ParquetStream.read(k)`` return the next ``k`` rows as float64.
 
 from __future__ import annotations
 
-import json
 import zipfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -178,11 +177,10 @@ def _scan_npy_dir(path: Path):
                               fix="store one <column>.npy per column (e.g. time.npy, output.npy)")
     meta = {}
     if (path / "meta.json").is_file():
-        try:
-            meta = json.loads((path / "meta.json").read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise FileFormatError(f"meta.json is not valid JSON ({exc})",
-                                  file=str(path / "meta.json"), fix="rewrite it") from None
+        from ._read import _json_meta
+
+        meta = _json_meta((path / "meta.json").read_bytes(), str(path / "meta.json"),
+                          "meta.json")
     lengths, cols = {}, {}
     for f in files:
         with open(f, "rb") as fh:
@@ -206,7 +204,10 @@ def _scan_parquet(path: Path):
         raise FileFormatError(f"cannot read as Parquet ({exc})", file=str(path),
                               fix="check the file is a complete Parquet file") from None
     schema = pf.schema_arrow
-    meta = json.loads((schema.metadata or {}).get(b"fogbayes", b"{}"))
+    from ._read import _json_meta
+
+    meta = _json_meta((schema.metadata or {}).get(b"fogbayes", b"{}"), str(path),
+                      "the schema metadata 'fogbayes'")
     n = pf.metadata.num_rows
     for field in schema:
         t = field.type
