@@ -15,7 +15,10 @@ the user calls it; its final terms are then refitted on the loop's blocks by
 each with the IEEE 952 constant (least squares has it by construction). ``--lpd`` prints
 instead, for the base model's terms, the time-blocked held-out log predictive density
 (:func:`fogbayes.loop.holdout.score`) under the noise model with and without the walk, and
-with least-squares coefficients under the walk: can held-out prediction choose? The error is
+with least-squares coefficients under the walk: can held-out prediction choose?
+``--coverage`` prints, for the base model's terms by GLS with and without the walk, the
+error against the truth beside the calibration's own stated standard error (RMS over the
+record of the model's prediction s.e. from ``cov_beta``): is the stated uncertainty honest? The error is
 study_random's: RMS of 10 s means of (model - truth), mean kept; the plain ``fogbayes fit
 -m bias-t`` is the floor. Rows go to stdout as JSON lines.
 """
@@ -86,13 +89,37 @@ def lpd_row(seed: int) -> dict:
                 lpd_least_squares_walk=holdout.score(walk, fw, ols=True).lpd)
 
 
+def coverage_row(seed: int) -> dict:
+    import fogbayes  # noqa: F401
+    from fogbayes.diagnose.context import make_context
+    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.diagnose.terms import design
+    from fogbayes.loop.bases import base_terms
+    from fogbayes.loop.constant import ieee_constant
+
+    case = sr.draw(seed)
+    rec, true_det, _ = sr.build(case)
+    out = dict(seed=seed, family=case["family"])
+    for name, walk in (("walk", True), ("no_walk", False)):
+        ctx = make_context(rec, random_walk=walk)
+        terms = base_terms(ctx, "bias-t")
+        fit = ieee_constant(ctx, fit_terms(ctx, terms))
+        X = design(list(terms), ctx.cov)
+        se = np.sqrt(np.einsum("ij,jk,ik->i", X, np.asarray(fit.noise.cov_beta), X))
+        out[f"err_{name}"] = sr._err(rec.time, ctx.rate - fit.residual, true_det, ctx.outlier)
+        out[f"se_{name}"] = float(np.sqrt(np.mean(se ** 2)))
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", nargs=2, type=int, default=(2, 13), metavar=("FIRST", "STOP"))
     ap.add_argument("--lpd", action="store_true", help="held-out predictive densities instead")
+    ap.add_argument("--coverage", action="store_true", help="error against stated s.e. instead")
     a = ap.parse_args()
+    one = lpd_row if a.lpd else coverage_row if a.coverage else row
     for s in range(*a.seeds):
-        print(json.dumps((lpd_row if a.lpd else row)(s)), flush=True)
+        print(json.dumps(one(s)), flush=True)
 
 
 if __name__ == "__main__":
