@@ -115,10 +115,14 @@ def test_the_loop_points_an_undecided_thermal_duel_to_the_planner():
     from types import SimpleNamespace as NS
 
     from fogbayes.cli.loop import undecided
+    from fogbayes.loop.ranking import separable_by_programme
+
+    def alt(chosen, other):  # as the loop writes an undecided duel (loop.ranking.alternatives)
+        return {"effect": other, "separable_by_programme": separable_by_programme(chosen, other)}
 
     lag = NS(effect="temperature_gradient",
-             evidence={"alternatives": [{"effect": "thermal_lag"}]})
-    step = NS(effect="step", evidence={"alternatives": [{"effect": "time_drift"}]})
+             evidence={"alternatives": [alt("temperature_gradient", "thermal_lag")]})
+    step = NS(effect="step", evidence={"alternatives": [alt("step", "time_drift")]})
     plain = NS(effect="periodic", evidence={})
     lines = undecided([lag, step, plain])
     assert len(lines) == 2

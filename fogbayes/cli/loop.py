@@ -24,19 +24,16 @@ from .loop_progress import loop_progress
 LOOP_MIN_SAMPLES = 100
 
 
-#: Effects whose confusions a chamber programme can resolve (fogbayes.plan.programme).
-THERMAL_PAIRS = {"thermal_lag", "temperature_gradient", "temperature_rate"}
-
-
 def undecided(steps) -> list[str]:
     """One line per step whose duel the data could not decide, with the way out when a
     chamber programme can decide it (docs/plan.md)."""
     out = []
     for step in steps:
-        alts = [a["effect"] for a in step.evidence.get("alternatives", [])]
-        if alts:
+        rows = step.evidence.get("alternatives", [])
+        alts = [a["effect"] for a in rows]
+        if alts:  # the loop marks the duels a chamber programme could decide
             hint = (" (fogbayes plan-chamber proposes a chamber programme that separates them)"
-                    if {step.effect, *alts} <= THERMAL_PAIRS else "")
+                    if all(a.get("separable_by_programme") for a in rows) else "")
             out.append(f"undecided: {step.effect} kept (fewer searched parameters); the data "
                        f"cannot tell it from {', '.join(alts)}{hint}")
     return out

@@ -17,6 +17,14 @@ from . import holdout
 
 #: Family-wise screening level a linear candidate must also reach.
 SCREEN_GATE = 0.1
+#: Effects a chamber programme can tell apart (``fogbayes plan-chamber``,
+#: :mod:`fogbayes.plan.programme`): how fast and how long the chamber ramps and soaks.
+PROGRAMME_SEPARABLE = frozenset({"thermal_lag", "temperature_gradient", "temperature_rate"})
+
+
+def separable_by_programme(chosen: str, alternative: str) -> bool:
+    """Whether another chamber programme could decide a duel the data left undecided."""
+    return {chosen, alternative} <= PROGRAMME_SEPARABLE
 
 
 def supported_trials(ctx, fit, trials, opts, n_cand: int, cache) -> list:
@@ -99,7 +107,10 @@ def alternatives(ctx, chosen, duels, opts, cache) -> list[dict]:
             continue
         alt = b if a[0] is chosen else a
         d = el.compare(ctx, chosen.fit, alt[0].fit, seed=opts.seed, cache=cache)
-        out.append({"effect": alt[0].screened.candidate.effect,
+        effect = alt[0].screened.candidate.effect
+        out.append({"effect": effect,
+                    "separable_by_programme": separable_by_programme(
+                        chosen.screened.candidate.effect, effect),
                     "likelihood_ratio": alt[0].lr,
                     "searched": alt[0].screened.candidate.searched,
                     "d_2loglik_alternative_minus_chosen": du.d_obs if a[0] is chosen else -du.d_obs,

@@ -110,8 +110,7 @@ def loop_section(res):
                 f"{a['elpd_diff_chosen_minus_alternative']:.3g} +- {a['elpd_diff_se']:.3g})"
                 for a in e["alternatives"]) + (
                 ". A chamber programme that separates them: fogbayes plan-chamber (docs/plan.md)"
-                if {s.effect, *(a["effect"] for a in e["alternatives"])} <= {
-                    "thermal_lag", "temperature_gradient", "temperature_rate"} else ""),
+                if all(a.get("separable_by_programme") for a in e["alternatives"]) else ""),
                 ok=False)
         sec.table(["candidate effect", "screening 2 dlogL", "log10 p", "log10 p, family-wise"],
                   [[r["effect"], r["screen_lr"], Cell(fmt(r["log10_p"], sig=3)),
