@@ -4,7 +4,19 @@
 ``to_json()`` with the docs/DESIGN.md contract, compensated columns).
 """
 
-from .core import RULE, run_loop
-from .result import LoopResult, Rejected, Step
-
 __all__ = ["LoopResult", "RULE", "Rejected", "Step", "run_loop"]
+
+# Resolved on first use: importing a light submodule (``fogbayes.loop.progress``, which every
+# CLI command imports) must not import the loop's machinery and JAX with it.
+_LAZY = {"RULE": ".core", "run_loop": ".core", "LoopResult": ".result", "Rejected": ".result",
+         "Step": ".result"}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'fogbayes.loop' has no attribute {name!r}")

@@ -1,0 +1,37 @@
+"""``fogbayes fit REC -m bias-t`` is least squares on NumPy: a fresh process that runs it must
+not import JAX or NumPyro (their import is most of the command's wall time), and its document
+is the library's ``fit_recording`` (same coefficients, bit for bit)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+
+import fogbayes
+from fogbayes.simulate import simulate
+from fogbayes.thermal.workflow import fit_recording
+
+_CODE = """
+import json, sys
+from fogbayes.cli import main
+after_import = sorted(m for m in ("jax", "numpyro") if m in sys.modules)
+rc = main(["-q", "fit", sys.argv[1], "-m", "bias-t", "--json", sys.argv[2]])
+print(json.dumps({"rc": rc, "after_import": after_import,
+                  "after_fit": sorted(m for m in ("jax", "numpyro") if m in sys.modules)}))
+"""
+
+
+def test_fit_bias_t_in_a_fresh_process_imports_no_jax(tmp_path):
+    rec = simulate("thermal", seed=2, duration=3600.0, fs=1.0).recording
+    src = fogbayes.save(rec, tmp_path / "rec.csv")
+    out = tmp_path / "fit.json"
+    run = subprocess.run([sys.executable, "-c", _CODE, str(src), str(out)], capture_output=True,
+                         text=True, check=True)
+    seen = json.loads(run.stdout.strip().splitlines()[-1])
+    assert seen == {"rc": 0, "after_import": [], "after_fit": []}
+    doc = json.loads(out.read_text())
+    ref = fit_recording(fogbayes.load(src), model="bias-t")
+    np.testing.assert_array_equal(doc["params"]["coef"], ref["params"]["coef"])
