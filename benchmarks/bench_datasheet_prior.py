@@ -70,7 +70,7 @@ def _terms(fit_terms) -> dict:
 
 
 def one(seed: int, n: int, factors: list[float], looseness: float, cli: bool) -> dict:
-    y = allan_noise(4 * n, FS, seed=seed, **TRUTH)[:n]
+    y = allan_noise(4 * n, FS, seed=seed, flicker_span=1, **TRUTH)[:n]
     data, _, _ = fit_range(prepare(y, FS))
     row = {"seed": seed, "n": n}
     for k, factor in enumerate([None] + factors):

@@ -147,7 +147,7 @@ def allan(sizes):
 
     c, w, s = sizes(2, 400, 600)
     fs = 10.0
-    y = allan_noise(4 * 2**14, fs, seed=21, Q=0.19, N=0.01, B=0.404, K=4.41)[:2**14]
+    y = allan_noise(4 * 2**14, fs, seed=21, flicker_span=1, Q=0.19, N=0.01, B=0.404, K=4.41)[:2**14]
     data = prepare(y, fs)
 
     def call(seed):

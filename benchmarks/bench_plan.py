@@ -71,7 +71,7 @@ def record(mix: str, n: int, seed: int) -> np.ndarray:
 def pilot(mix: str, seed: int) -> tuple[np.ndarray, float]:
     fs, p = MIXES[mix]
     n = int(PILOT_S * fs)
-    return allan_noise(4 * n, fs, seed=seed, **p)[:n], fs
+    return allan_noise(4 * n, fs, seed=seed, flicker_span=1, **p)[:n], fs
 
 
 def fit_one(args) -> dict:

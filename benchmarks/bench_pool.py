@@ -52,7 +52,7 @@ def unit_truth(rng):
 
 
 def simulate(truth, n, seed):
-    return allan_noise(4 * n, FS, seed=seed, **truth)[:n]
+    return allan_noise(4 * n, FS, seed=seed, flicker_span=1, **truth)[:n]
 
 
 def one_rep(rep, args):

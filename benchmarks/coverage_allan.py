@@ -5,9 +5,8 @@ For each noise mix and record length, simulate many records with
 count how often the 90 % interval of each parameter contains the truth; compare the RMS
 relative error of the fitted values with that of the IEEE-952 slope readouts.
 
-The simulator's flicker (bias-instability) noise has no power below 1/(4T) (T its length);
-the records here are cut from 4 x longer draws, so the flicker reaches down to 1/(16 T), as
-a real sensor's does (see RESULTS_allan.md).
+The records are cut from 4 x longer draws (``flicker_span=1``: the cut is made here), so
+the flicker reaches below 1/T, as a real sensor's does (see RESULTS_allan.md).
 
     python benchmarks/coverage_allan.py --methods wls --seeds 200
     python benchmarks/coverage_allan.py --methods bayes --seeds 40 --out cov.json
@@ -42,7 +41,7 @@ LENGTHS = {"A": (17, 19), "B": (18, 20)}
 
 def simulate(mix: str, n: int, seed: int) -> tuple[np.ndarray, float, dict]:
     fs, truth = MIXES[mix]
-    return allan_noise(4 * n, fs, seed=seed, **truth)[:n], fs, truth
+    return allan_noise(4 * n, fs, seed=seed, flicker_span=1, **truth)[:n], fs, truth
 
 
 def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:

@@ -27,7 +27,7 @@ def study():
     for seed in range(RECORDS):
         # 4x longer, first quarter kept: the simulator's flicker noise has no power below
         # 1/length, a real sensor's has (see RESULTS_allan.md)
-        y = allan_noise(4 * N_SAMPLES, FS, seed=1000 + seed, **TRUTH)[:N_SAMPLES]
+        y = allan_noise(4 * N_SAMPLES, FS, seed=1000 + seed, flicker_span=1, **TRUTH)[:N_SAMPLES]
         data = prepare(y, FS)  # octave AVAR and its covariance model
         fit = fit_wls(data, PARAMS)
         inside.append([fit.terms[p].low <= TRUTH[p] <= fit.terms[p].high for p in PARAMS])

@@ -21,7 +21,7 @@ TRUTH = dict(Q=0.19, N=0.01, B=0.404, K=4.41)  # crossovers 0.3, 5 and 40 s at 1
 
 @pytest.fixture(scope="module")
 def data():
-    return prepare(allan_noise(4 * 2**14, FS, seed=5, **TRUTH)[:2**14], FS)
+    return prepare(allan_noise(4 * 2**14, FS, seed=5, flicker_span=1, **TRUTH)[:2**14], FS)
 
 
 def test_paper_lsq_is_exact_on_a_noise_free_curve(data):
@@ -61,7 +61,7 @@ def test_cycling_gls_weights_keep_the_likelier_solution():
     # on 11 dof (gof p 2e-9: every interval widened 2.4x; fit_range then left out short taus
     # to gof p 3e-42) and K at 0.54x its truth.
     truth = dict(Q=0.19, N=0.011528340084884356, B=0.18698674619406008, K=0.764322105548686)
-    y = allan_noise(4 * 2**17, FS, seed=2_200_002, **truth)[:2**17]
+    y = allan_noise(4 * 2**17, FS, seed=2_200_002, flicker_span=1, **truth)[:2**17]
     fit = fit_wls(prepare(y, FS))
     assert not fit.info["weights_settled"] and fit.info["passes"] > 3
     assert fit.info["gof_p"] > 0.05 and fit.info["dispersion"] == 1.0
@@ -104,7 +104,7 @@ def test_settled_gls_weights_are_a_fixed_point(data):
 def test_fit_range_leaves_out_filtered_octaves_only_when_needed(data):
     _, _, dropped = fit_range(data)
     assert dropped == 0  # simulated from the model: the goodness of fit passes
-    y = allan_noise(4 * 2**14, FS, seed=6, **TRUTH)[:2**14]
+    y = allan_noise(4 * 2**14, FS, seed=6, flicker_span=1, **TRUTH)[:2**14]
     b, a = signal.butter(2, 0.15)  # a sensor's low-pass filter at 0.75 Hz
     filtered = prepare(signal.lfilter(b, a, y), FS)
     sub, fit, dropped = fit_range(filtered)

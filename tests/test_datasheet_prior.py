@@ -99,7 +99,7 @@ def test_log_normal_prior_is_scipys_with_90_percent_within_the_looseness():
 @pytest.fixture(scope="module")
 def short():
     """Seven minutes at 10 Hz of mix A: K (crossover with B at 300 s) is not resolved."""
-    y = allan_noise(4 * 2**12, FS, seed=5, **TRUTH)[:2**12]
+    y = allan_noise(4 * 2**12, FS, seed=5, flicker_span=1, **TRUTH)[:2**12]
     return y, fit_range(prepare(y, FS))[0]
 
 

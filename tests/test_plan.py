@@ -24,7 +24,7 @@ MIX_A = AllanParams(Q=0.19, N=0.01, B=0.165, K=0.66)  # benchmarks/coverage_alla
 
 
 def _pilot(n=1 << 14, fs=10.0, seed=3, **p):
-    return allan_noise(4 * n, fs, seed=seed, **p)[:n]
+    return allan_noise(4 * n, fs, seed=seed, flicker_span=1, **p)[:n]
 
 
 @pytest.mark.parametrize("terms, drop", [(("Q", "N", "B"), 0), (("Q", "N", "B", "K"), 2)])

@@ -229,7 +229,7 @@ def _write_units(folder: Path, n_units: int, *, n=2**14, fs=10.0, outlier=None):
         N = 0.01 * np.exp(0.1 * rng.standard_normal())
         if u == outlier:
             N *= 4.0
-        y = allan_noise(4 * n, fs, seed=u, Q=0.19, N=N, B=0.165, K=k)[:n]
+        y = allan_noise(4 * n, fs, seed=u, flicker_span=1, Q=0.19, N=N, B=0.165, K=k)[:n]
         save(Recording(time=np.arange(n) / fs, output=y, unit="deg/h",
                        meta=Metadata(sensor_id=f"unit{u}", sample_rate=fs)),
              folder / f"unit{u}.npz")

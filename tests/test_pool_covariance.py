@@ -99,7 +99,7 @@ def test_at_population_takes_each_units_covariance_at_the_population_median():
     # a unit of benchmarks/bench_pool.py's fleets (a tactical FOG at 10 Hz), 55 min; the
     # flicker drawn over 4x the record, as there
     n, fs = 2 ** 15, 10.0
-    y = allan_noise(4 * n, fs, seed=7, Q=0.19, N=0.01, B=0.165, K=0.66)[:n]
+    y = allan_noise(4 * n, fs, seed=7, flicker_span=1, Q=0.19, N=0.01, B=0.165, K=0.66)[:n]
     unit = unit_from_fit("u0", None, n, fs, *fit_range(prepare(y, fs)))
     own = {t: unit.terms[t].value for t in ("N", "B")}
     (same,) = at_population([unit], ("N", "B"), own)

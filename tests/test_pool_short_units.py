@@ -53,14 +53,18 @@ def pooled(units):
 
 
 def test_the_truth_lies_within_what_the_population_states(pooled):
-    """No unit resolves B or K alone; the population median's 90 % interval holds the truth
-    (or, for a term the population does not resolve, [0, bound] does). The flat-below
-    likelihood of unresolved terms and a normal prior of sd 10 on log mu put B at 1.9e-5
+    """Units leave B or K unresolved; the population median's 90 % interval holds the truth
+    (or, for a term the population does not resolve, [0, bound] does). A normal prior of sd
+    10 on log mu and the unresolved terms' likelihood left flat below once put B at 1.9e-5
     deg/h [7.7e-11, 0.0096] and K at 5.4e-5 [7.8e-11, 0.027]: both below the truth."""
-    pool, _, _ = pooled
-    assert pool["converged"]
-    for t in ("B", "K"):
-        assert not any(u["terms"][t]["single"]["resolved"] for u in pool["units"]), t
+    pool, err, _ = pooled
+    # Such pools often end with the sampler's diagnostics outside the rule (13 of the 20 of
+    # benchmarks/RESULTS_pool.md): then the command must say so, and what it states must
+    # still hold the truth.
+    assert pool["converged"] or "converge" in err.lower(), err
+    # the records are short enough that units leave B or K unresolved: the path under test
+    assert sum(not u["terms"][t]["single"]["resolved"] for u in pool["units"]
+               for t in ("B", "K")) >= 4
     for t, true in TRUTH.items():
         p = pool["population"][t]
         m = p["median"]

@@ -203,7 +203,7 @@ def pool_report(tmp_path_factory):
     for u in range(8):
         N = 0.01 * np.exp(0.1 * rng.standard_normal()) * (4.0 if u == 2 else 1.0)
         K = 0.66 * np.exp(0.2 * rng.standard_normal())
-        y = allan_noise(4 * n, fs, seed=u, Q=0.19, N=N, B=0.165, K=K)[:n]
+        y = allan_noise(4 * n, fs, seed=u, flicker_span=1, Q=0.19, N=N, B=0.165, K=K)[:n]
         save(Recording(time=np.arange(n) / fs, output=y, unit="deg/h",
                        meta=Metadata(sensor_id=f"FOG-{u:03d}", sample_rate=fs)),
              d / f"unit{u}.npz")

@@ -105,12 +105,15 @@ def rate_ramp(n: int, fs: float, *, R: float) -> np.ndarray:
 
 
 def allan_noise(n: int, fs: float, *, seed: int, Q: float = 0.0, N: float = 0.0,
-                B: float = 0.0, K: float = 0.0, R: float = 0.0) -> np.ndarray:
+                B: float = 0.0, K: float = 0.0, R: float = 0.0,
+                flicker_span: int = 4) -> np.ndarray:
     """Rate noise (deg/h) whose Allan variance is the five-term model of the module docstring.
 
     Args:
         n: number of samples; fs: sample rate (Hz); seed: explicit integer seed.
         Q arcsec, N deg/sqrt(h), B deg/h, K deg/h^1.5, R deg/h^2 (all >= 0 except R).
+        flicker_span: the flicker is drawn over this many times n (:func:`flicker_noise`);
+            1 for a caller that draws a longer record and cuts it itself.
 
     Example:
         >>> x = allan_noise(1000, 10.0, seed=0, N=0.01)
@@ -124,7 +127,7 @@ def allan_noise(n: int, fs: float, *, seed: int, Q: float = 0.0, N: float = 0.0,
     if N:
         out += white_noise(n, fs, seed=seed, N=N)
     if B:
-        out += flicker_noise(n, fs, seed=seed, B=B)
+        out += flicker_noise(n, fs, seed=seed, B=B, span=flicker_span)
     if K:
         out += random_walk_noise(n, fs, seed=seed, K=K)
     if R:
