@@ -17,11 +17,13 @@ class FogbayesError(ValueError):
 
     Attributes:
         file: the file the problem is in (None for in-memory data).
-        column: the name concerned, if any: a column of a table, or, given as ``field=`` or
-            ``flag=``, a document field or a command-line option (a name starting with
-            ``-`` is an option whichever keyword brought it).
+        column: the name concerned, if any: a column of a table, or, given as ``field=``,
+            ``flag=`` or ``argument=``, a document field, a command-line option (a name
+            starting with ``-`` is an option whichever keyword brought it) or a function's
+            argument.
         kind: what ``column`` names, as the message says it: ``"column"``, ``"field"`` (a
-            key of a JSON document or of metadata, dotted path) or ``"option"``.
+            key of a JSON document or of metadata, dotted path), ``"option"`` or
+            ``"argument"``.
         row: 0-based data row (the first row after the header is row 0), if any.
         fix: one sentence saying how to fix it.
         line: the 1-based physical line of the file (CSV: counting the ``# key: value``
@@ -39,12 +41,15 @@ class FogbayesError(ValueError):
         line: int | None = None,
         field: str | None = None,
         flag: str | None = None,
+        argument: str | None = None,
     ):
         self.problem = problem
         self.file = file
-        self.column = column if column is not None else (field if field is not None else flag)
+        named = [v for v in (column, field, flag, argument) if v is not None]
+        self.column = named[0] if named else None
         self.kind = ("option" if flag is not None or str(self.column).startswith("-")
-                     else "field" if field is not None else "column")
+                     else "field" if field is not None
+                     else "argument" if argument is not None and column is None else "column")
         self.row = row
         self.fix = fix
         self.line = line

@@ -35,3 +35,16 @@ def test_fit_bias_t_in_a_fresh_process_imports_no_jax(tmp_path):
     doc = json.loads(out.read_text())
     ref = fit_recording(fogbayes.load(src), model="bias-t")
     np.testing.assert_array_equal(doc["params"]["coef"], ref["params"]["coef"])
+
+
+def test_fit_without_json_prints_the_result_and_writes_nothing(tmp_path):
+    """``--json`` is optional: the summary is printed, no file is written, and the user is told
+    how to keep the calibration (before, click stopped with "Missing option '--json'")."""
+    rec = simulate("thermal", seed=2, duration=3600.0, fs=1.0).recording
+    src = fogbayes.save(rec, tmp_path / "rec.csv")
+    run = subprocess.run([sys.executable, "-m", "fogbayes", "fit", str(src), "-m", "bias-t"],
+                         capture_output=True, text=True, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "bias-t: converged=True" in run.stderr
+    assert "add --json" in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rec.csv"]

@@ -125,3 +125,17 @@ def test_a_folder_where_a_document_goes_is_one_line(d, capsys, argv):
     assert code == 2 and len(err) == 1, err
     assert err[0].startswith(f"fogbayes: error: {d / 'folder.json'}: "), err
     assert "is a folder, not a file. Fix: name the JSON file itself" in err[0], err
+
+
+@pytest.mark.parametrize("command", [["info"], ["fit", "-m", "bias-t"], ["allan", "--json"]])
+def test_a_folder_given_as_the_recording_is_called_a_folder(tmp_path, capsys, command):
+    """A plain folder (not a ROS 2 bag) was "unknown file type ''"; now it is named a folder
+    and the fix points to one file in it or to the commands that take folders."""
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    tail = [*command[1:], str(tmp_path / "a.json")] if command[-1] == "--json" else command[1:]
+    code = main([command[0], str(folder), *tail])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1, err
+    assert "runs: a folder, not a recording" in err and "fogbayes pool" in err

@@ -94,3 +94,16 @@ def test_unknown_model_names_the_option(static, capsys, tmp_path, command):
     rc, err = run(capsys, command[0], static / "s.csv", "-m", "foo", command[1],
                   tmp_path / command[2])
     assert rc == 2 and "option '--model': unknown model 'foo'" in err
+
+
+def test_a_function_argument_is_called_an_argument_not_a_column():
+    """``allan_deviation(x, taus=[0])`` said "column 'taus'" though no table is involved."""
+    import numpy as np
+
+    from fogbayes.errors import FogbayesError
+    from fogbayes.stats.allan import allan_deviation
+
+    with pytest.raises(FogbayesError) as info:
+        allan_deviation(np.random.default_rng(0).normal(size=1000), 1.0, taus=[0])
+    assert "argument 'taus'" in str(info.value) and "column" not in str(info.value)
+    assert info.value.kind == "argument"

@@ -56,7 +56,7 @@ def parse_candidates(candidates: str) -> tuple[tuple[int, int], ...]:
             raise ValueError
         return out  # type: ignore[return-value]
     except ValueError:
-        raise ArgumentError(f"cannot read candidate orders {candidates!r}", column="candidates",
+        raise ArgumentError(f"cannot read candidate orders {candidates!r}", argument="candidates",
                             fix="use 'paper', 'grid', 'grid:P,Q' or 'p,q;p,q;...' "
                                 "(e.g. '1,0;2,1')") from None
 
@@ -69,11 +69,11 @@ def decimate_series(time: np.ndarray, x: np.ndarray, k: int) -> tuple[np.ndarray
 
 def _prepare(rec: Recording, decimate: int, detrend_order: int):
     if int(decimate) < 1:
-        raise ArgumentError(f"decimate must be >= 1, got {decimate}", column="decimate",
+        raise ArgumentError(f"decimate must be >= 1, got {decimate}", argument="decimate",
                             fix="give a positive integer factor, e.g. --decimate 10")
     if int(detrend_order) < 0:
         raise ArgumentError(f"detrend order must be >= 0, got {detrend_order}",
-                            column="detrend", fix="use 0 (mean only), 1 (linear), 2, ...")
+                            argument="detrend", fix="use 0 (mean only), 1 (linear), 2, ...")
     gaps = rec.sampling().gaps
     if gaps:
         g = gaps[0]
@@ -93,7 +93,7 @@ def analyse_recording(rec: Recording, *, decimate: int = 1, detrend_order: int =
     """Run the whole ARMA analysis of ``rec`` (see module docstring) and build the document."""
     if criterion not in ("aic", "bic"):
         raise ArgumentError(f"criterion must be 'aic' or 'bic', got {criterion!r}",
-                            column="criterion", fix="use --criterion aic or --criterion bic")
+                            argument="criterion", fix="use --criterion aic or --criterion bic")
     orders = parse_candidates(candidates)
     t, x, trend = _prepare(rec, decimate, detrend_order)
     sel = select_order(x, orders)
@@ -143,7 +143,7 @@ def analyse_recording(rec: Recording, *, decimate: int = 1, detrend_order: int =
 def _bayes_section(x: np.ndarray, orders, seed: int) -> dict:
     if x.size > MAX_BAYES_SAMPLES:
         raise ArgumentError(f"Bayesian WAIC/LOO keeps draws x n pointwise log-likelihoods; "
-                            f"n = {x.size} exceeds {MAX_BAYES_SAMPLES}", column="bayes",
+                            f"n = {x.size} exceeds {MAX_BAYES_SAMPLES}", argument="bayes",
                             fix="decimate further (--decimate) or analyse a slice")
     from .bayes import compare_orders_bayes
 
@@ -166,7 +166,7 @@ def fit_recording(rec: Recording, *, model: str = "arma", orders: str | None = N
                   bayes: bool = False, seed: int = 0, **options) -> dict:
     """Workflow-contract entry point: the ARMA document of :func:`analyse_recording`."""
     if model != "arma":
-        raise ArgumentError(f"the ARMA workflow fits model 'arma', not {model!r}", column="model",
+        raise ArgumentError(f"the ARMA workflow fits model 'arma', not {model!r}", argument="model",
                             fix="use fogbayes.workflow.workflow_for(model) for other models")
     return analyse_recording(rec, candidates=orders or "paper", bayes=bayes, seed=seed,
                              **options).document

@@ -135,7 +135,9 @@ def fit(
     rec: Path = REC_ARG,
     model: str = typer.Option(..., "--model", "-m",
                               help="bias-t | thermal | composite | allan | arma."),
-    json_out: str = typer.Option(..., "--json", help="Fit document to write ('-' = stdout)."),
+    json_out: str = typer.Option(None, "--json",
+                                 help="Fit document to write ('-' = stdout); without it the "
+                                      "result is only printed."),
     orders: str = typer.Option(None, "--orders", "--order",
                                help="Order(s): bias-t '3' or '1-4'; thermal '2,2' or '1-3,1-2'; "
                                     "composite 's1,s2,u0[,u1]' (three values: u1 = u0); "
@@ -166,7 +168,7 @@ def fit(
     temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
-    """Fit a model to a recording and write the fit document as JSON.
+    """Fit a model to a recording, print the result and (with --json) write the fit document.
 
     The document holds the coefficients in the scaled basis (what 'fogbayes compensate' uses) and in the papers' raw form with standard errors, the processing, outlier counts, bias stability before/after (thermal models) and, with --bayes, posterior intervals and convergence.
 
@@ -211,7 +213,8 @@ def fit(
                    temperature_offset=temperature_offset, topic=topic, instance=instance)
     docs, doc = fit_channels(rec, axis, column, load_kw, fit_one,
                              f"fitting {model}" + (" (posterior)" if bayes else ""))
-    write_json(doc, json_out)
+    if json_out is not None:
+        write_json(doc, json_out)
     for name, one in docs.items():
         tag = "" if name is None else f"[{name}] "
         if gls:
@@ -227,6 +230,8 @@ def fit(
                     say(tag + line)
         for warning in one.get("warnings") or []:  # e.g. not identifiable, gross errors
             say(f"{tag}warning: {warning}")
+    if json_out is None:  # printed only: say how to keep it, since compensate needs the file
+        say("not saved: add --json FIT.json to keep the calibration for 'fogbayes compensate'")
     converged = [one.get("calibration", {}).get("noise", {}).get("converged", False) if gls
                  else one.get("converged", False) for one in docs.values()]
     if strict and not all(converged):

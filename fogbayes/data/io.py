@@ -123,6 +123,11 @@ def load(
                                     fix=f"drop {flag}; name the column with --column "
                                         "(output= in fogbayes.load)")
         kind = FORMATS.get(path.suffix.lower())
+        if path.is_dir():  # not a ROS 2 bag (is_log said so): say what it is, not its suffix
+            raise FileFormatError("a folder, not a recording (and not a ROS 2 bag folder: no "
+                                  "metadata.yaml)", file=src,
+                                  fix="name one recording file in it (.csv, .parquet or .npz); "
+                                      "'fogbayes pool' and 'fogbayes batch' take a folder")
         if kind is None:
             raise FileFormatError(f"unknown file type '{path.suffix}'", file=src,
                                   fix=f"use .csv, .parquet or .npz, or a gyro log "

@@ -174,7 +174,7 @@ def arma_noise(n: int, *, seed: int, phi=(), theta=(), sigma: float = 1.0) -> np
     if phi.size and np.max(np.abs(np.roots(a))) >= 1.0:
         raise SimulationParameterError(
             f"the AR part phi={phi.tolist()} is not stationary (a root of the AR polynomial "
-            "lies on or outside the unit circle)", column="phi",
+            "lies on or outside the unit circle)", argument="phi",
             fix="choose phi with all roots of z^p - phi_1 z^(p-1) - ... - phi_p inside |z| < 1")
     rng = _rng(seed, "arma")
     e = sigma * rng.standard_normal(n)

@@ -93,11 +93,11 @@ def as_segments(segments: Sequence) -> list:
             out.append(Ramp(float(seg["ramp"]), float(seg["rate"])))
         else:
             raise SimulationParameterError(
-                f"segment {j} is {seg!r}", column="segments",
+                f"segment {j} is {seg!r}", argument="segments",
                 fix='give Soak/Ramp or {"soak": deg_C, "duration": s} / '
                     '{"ramp": to_deg_C, "rate": deg_C_per_min}')
     if not out:
-        raise SimulationParameterError("the programme has no segment", column="segments",
+        raise SimulationParameterError("the programme has no segment", argument="segments",
                                        fix="give at least one Soak or Ramp")
     return out
 
@@ -117,14 +117,14 @@ def segment_knots(segments: Sequence, *, start: float) -> tuple[np.ndarray, np.n
             if seg.temperature != temps[-1]:
                 raise SimulationParameterError(
                     f"segment {j} soaks at {seg.temperature} deg C but the chamber is at "
-                    f"{temps[-1]} deg C", column="segments",
+                    f"{temps[-1]} deg C", argument="segments",
                     fix="put a Ramp to the soak temperature before the Soak")
         elif isinstance(seg, Ramp):
             rate = positive(abs(seg.rate), f"segment {j} ramp rate")
             to = float(seg.to)
             dt = abs(to - temps[-1]) / rate * 60.0
         else:
-            raise SimulationParameterError(f"segment {j} is {seg!r}", column="segments",
+            raise SimulationParameterError(f"segment {j} is {seg!r}", argument="segments",
                                            fix="use Soak(temperature, duration_s) or "
                                                "Ramp(to, rate_deg_C_per_min)")
         times.append(times[-1] + dt)
@@ -202,7 +202,7 @@ def thermal_profile(segments: Sequence, *, fs: float, start: float,
         names = tuple("temperature" if j == 0 else f"temperature_{j + 1}" for j in range(len(lags)))
     if len(names) != len(lags):
         raise SimulationParameterError(f"{len(names)} names for {len(lags)} lags",
-                                       column="names", fix="give one name per lag")
+                                       argument="names", fix="give one name per lag")
     rates = sensor_rates(temps, ch, lags, chamber_rate(t, segments, start=start))
     return ThermalProfile(t, ch, temps, tuple(names), lags, rates)
 
@@ -271,7 +271,7 @@ def rate_table_schedule(*, fs: float = 1.0, dwell: float = 60.0,
     nT, nW = len(temperatures), len(rates)
     if nT == 0 or nW == 0:
         raise SimulationParameterError("the rate table needs at least one temperature and rate",
-                                       column="temperatures", fix="give non-empty grids")
+                                       argument="temperatures", fix="give non-empty grids")
     k = np.arange(_not_too_many(nT * nW * per, "dwell * fs * cells"))
     cell = k // per
     iT, iW = cell // nW, cell % nW
@@ -282,7 +282,7 @@ def rate_table_schedule(*, fs: float = 1.0, dwell: float = 60.0,
     elif restart == "run":
         op = k / fs
     else:
-        raise SimulationParameterError(f"unknown restart {restart!r}", column="restart",
+        raise SimulationParameterError(f"unknown restart {restart!r}", argument="restart",
                                        fix="use 'cell', 'temperature' or 'run'")
     Tg, Wg = np.asarray(temperatures, float), np.asarray(rates, float)
     return RateTableSchedule(k / fs, Tg[iT], Wg[iW], op, iT, iW,

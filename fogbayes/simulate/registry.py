@@ -157,7 +157,7 @@ def _number(v) -> bool:
 def resolve(name: str, params: dict | None, cov: Covariates) -> dict[str, Any]:
     """The effect's full parameter set: defaults updated by ``params``; unknown keys raise."""
     if name not in EFFECTS:
-        raise SimulationParameterError(f"unknown effect '{name}'", column="effects",
+        raise SimulationParameterError(f"unknown effect '{name}'", argument="effects",
                                        fix=f"use one of {', '.join(sorted(EFFECTS))}")
     spec = EFFECTS[name]
     params = dict(params or {})

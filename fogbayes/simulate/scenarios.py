@@ -157,7 +157,7 @@ def _deg_h_to_output(unit: str, scale_factor: float | None) -> float:
     if unit in RAW_UNITS:
         if not scale_factor:
             raise SimulationParameterError(f"output unit {unit} needs a scale factor",
-                                           column="scale_factor",
+                                           argument="scale_factor",
                                            fix="pass scale_factor= in raw units per deg/s")
         return scale_factor / 3600.0
     return 1.0 / RATE_UNITS_IN_DEG_H[unit]
@@ -166,7 +166,7 @@ def _deg_h_to_output(unit: str, scale_factor: float | None) -> float:
 def _noise_parts(spec: dict, n: int, fs: float, seed: int) -> dict[str, np.ndarray]:
     bad = set(spec) - set(_NOISE_KEYS)
     if bad:
-        raise SimulationParameterError(f"unknown noise term(s) {sorted(bad)}", column="noise",
+        raise SimulationParameterError(f"unknown noise term(s) {sorted(bad)}", argument="noise",
                                        fix=f"use {', '.join(_NOISE_KEYS)}")
     parts = {}
     allan = {k: spec[k] for k in _ALLAN if spec.get(k)}
@@ -229,7 +229,7 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
         True
     """
     if scenario not in _BUILDERS:
-        raise SimulationParameterError(f"unknown scenario '{scenario}'", column="scenario",
+        raise SimulationParameterError(f"unknown scenario '{scenario}'", argument="scenario",
                                        fix=f"use one of {', '.join(SCENARIOS)}")
     seed = seed_int(seed)
     if fs is not None:  # 0 must not fall back to the default through `fs or 10.0`
@@ -241,7 +241,7 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
     except TypeError as exc:  # an option this scenario does not take
         if "keyword argument" not in str(exc):
             raise
-        raise SimulationParameterError(f"scenario '{scenario}': {exc}", column="options",
+        raise SimulationParameterError(f"scenario '{scenario}': {exc}", argument="options",
                                        fix="see help(fogbayes.simulate.simulate)") from None
     cov = base.cov
     n, fs_ = cov.time.size, base.fs
@@ -249,7 +249,7 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
     sf = scale_factor if scale_factor is not None else base.scale_factor
     if base.native and out_unit != base.unit:
         raise SimulationParameterError(f"scenario '{scenario}' is simulated in {base.unit}",
-                                       column="unit", fix=f"drop unit= or use {base.unit}")
+                                       argument="unit", fix=f"drop unit= or use {base.unit}")
     k = _deg_h_to_output(out_unit, sf)
 
     comps = dict(base.native)
@@ -262,7 +262,7 @@ def simulate(scenario: str = "thermal", *, seed: int, fs: float | None = None,
             continue
         if name in comps:
             raise SimulationParameterError(f"'{name}' is part of the scenario's model",
-                                           column="effects", fix="use an effect name")
+                                           argument="effects", fix="use an effect name")
         own = base.effects.get(name)
         if own is not None and params == {} and name in (effects or {}):
             full = on_top(name, own, cov)  # a bare name adds the effect to the scenario's

@@ -77,7 +77,7 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
                                per_decade=per_decade, bias_corrected=bias_corrected)
     if bias_corrected:
         raise FogbayesError(f"bias_corrected applies to the total kinds, not {kind}",
-                            column="bias_corrected",
+                            argument="bias_corrected",
                             fix="use kind='totdev', 'htotdev' or 'theo1', or leave it out")
     if kind == "tdev":  # TDEV^2 = tau^2 Mod AVAR / 3: the modified variance, rescaled
         r = allan_deviation(y, fs, taus=taus, kind="mdev", per_decade=per_decade, m_max=m_max,
@@ -109,7 +109,7 @@ def allan_deviation(y, fs: float, *, taus="octave", kind: str = "oadev", per_dec
         if missing.all(axis=-1).any():
             raise TooShortError("a sensor has no finite sample", fix="check the data")
     if method == "blocked" and kind != "oadev":
-        raise FogbayesError(f"method 'blocked' computes oadev only, not {kind}", column="method",
+        raise FogbayesError(f"method 'blocked' computes oadev only, not {kind}", argument="method",
                             fix="use method='auto' for other kinds")
     ms = _grid(n, taus, kind, per_decade, m_max)
     # The noise identification does not need the variances, nor does the EDF of a record
@@ -171,7 +171,7 @@ def _grid(n, taus, kind, per_decade, m_max) -> tuple[int, ...]:
     span = 3 if kind in ("mdev", "ohdev", "hdev") else 2
     if ms.size == 0 or ms[0] < 1 or span * ms[-1] > n:
         raise TooShortError(f"cluster sizes must lie in 1..{n // span} for {n} samples",
-                            column="taus", fix="pass smaller cluster sizes (samples, not s)")
+                            argument="taus", fix="pass smaller cluster sizes (samples, not s)")
     return tuple(int(m) for m in ms)
 
 

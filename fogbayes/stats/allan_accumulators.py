@@ -92,7 +92,7 @@ class PhaseAccumulator:
     def __init__(self, ms, *, chunk: int = DEFAULT_CHUNK):
         ms = np.unique(np.asarray(ms, dtype=np.int64))
         if ms.size == 0 or ms[0] < 1:
-            raise FogbayesError("cluster sizes must be positive integers", column="taus",
+            raise FogbayesError("cluster sizes must be positive integers", argument="taus",
                                 fix="pass cluster sizes m >= 1 (samples)")
         self.ms = tuple(int(m) for m in ms)
         self._ms = ms

@@ -58,7 +58,7 @@ def allan_variance_fast(y, ms, *, chunk: int | None = None) -> tuple[np.ndarray,
     acc, ms, pick = accumulator(ms, chunk=chunk)
     if 2 * ms[-1] > y.size or ms[0] < 1:
         raise TooShortError(f"cluster sizes must lie in 1..{y.size // 2} for {y.size} samples",
-                            column="taus", fix="pass smaller cluster sizes (samples, not s)")
+                            argument="taus", fix="pass smaller cluster sizes (samples, not s)")
     acc.update(y)
     sums, counts = pick(*acc.result())
     return variance(ms, sums, counts), counts

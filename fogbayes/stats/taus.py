@@ -61,7 +61,7 @@ def cluster_sizes(n: int, grid: str = "octave", *, per_decade: int = 20,
     elif grid == "all":
         ms = np.arange(1, top + 1)
     else:
-        raise TauGridError(f"unknown tau grid '{grid}'", column="taus",
+        raise TauGridError(f"unknown tau grid '{grid}'", argument="taus",
                            fix=f"use one of {', '.join(GRIDS)}")
     ms = np.unique(ms.astype(np.int64))
     return tuple(int(m) for m in ms if 1 <= m <= top)

@@ -49,7 +49,7 @@ def theo1_variance(y, ms) -> tuple[np.ndarray, np.ndarray]:
     top = theo1_limit(n)
     if ms.size == 0 or ms.min() < 2 or ms.max() > top or (ms % 2).any():
         raise TooShortError(f"Theo1 averaging factors must be even and lie in 2..{top} for "
-                            f"{n} samples, got {ms.tolist()}", column="taus",
+                            f"{n} samples, got {ms.tolist()}", argument="taus",
                             fix="pass even cluster sizes (tau = 0.75 m / fs)")
     S = phase_samples(y, float(np.mean(y)))
     sums = np.zeros(ms.size)

@@ -81,7 +81,7 @@ def _exact_factor(y: np.ndarray) -> float:
     n = _ratio_count(N)
     if n < 0:
         raise TooShortError(f"TheoBR needs at least 18 rate samples (19 phase points), got {N - 1}",
-                            column="taus", fix="record longer or use kind='theo1'")
+                            argument="taus", fix="record longer or use kind='theo1'")
     x = np.concatenate([[0.0], np.cumsum(y - np.mean(y))])  # phase in units of y * tau0
     ma = 9 + 3 * np.arange(n + 1)
     avar = np.array([np.mean((x[2 * m:] - 2 * x[m:-m] + x[:-2 * m]) ** 2) / (2.0 * m * m)
@@ -151,7 +151,7 @@ def theoh_grid(ms, n: int) -> tuple[np.ndarray, np.ndarray]:
     theo = ms[ms >= mk]
     if (theo % 2).any() or (theo > theo1_limit(n)).any():
         raise TooShortError(f"TheoH's TheoBR part (m >= {mk}) needs even m <= "
-                            f"{theo1_limit(n)}, got {theo.tolist()}", column="taus",
+                            f"{theo1_limit(n)}, got {theo.tolist()}", argument="taus",
                             fix="pass even cluster sizes from m = 0.2 n on")
     return allan, theo
 
@@ -207,7 +207,7 @@ def theo_family(y, fs: float, taus, kind: str, *, ci: float, m_max: int | None,
         else:
             allan, theo = theoh_grid(np.unique(np.asarray(taus, dtype=np.int64)), n)
             if allan.size and allan[0] < 1:
-                raise TooShortError("cluster sizes must be >= 1", column="taus",
+                raise TooShortError("cluster sizes must be >= 1", argument="taus",
                                     fix="pass positive cluster sizes (samples, not s)")
         one = lambda row: theoh_deviation(row, fs, allan, theo, ci=ci)  # noqa: E731
     if y.ndim == 1:

@@ -60,7 +60,7 @@ def total_variance(y, ms, kind: str) -> tuple[np.ndarray, np.ndarray]:
     limit = total_limits(y.size, kind)[0]
     if ms.size == 0 or ms.min() < 1 or ms.max() > limit:
         raise TooShortError(f"{kind} needs averaging factors in 1..{limit} for {y.size} "
-                            f"samples, got {ms.tolist()}", column="taus",
+                            f"samples, got {ms.tolist()}", argument="taus",
                             fix="pass smaller cluster sizes (samples, not s)")
     sums = np.zeros(ms.size)
     m = ms.astype(float)
@@ -163,7 +163,7 @@ def total_deviation(y, fs: float, *, taus="octave", kind: str = "totdev", ci: fl
     if kind in ("theobr", "theoh"):  # one bias factor per record: fogbayes.stats.theoh
         if bias_corrected:
             raise FogbayesError(f"{kind} is already bias-removed (Theo1 x AVAR/Theo1)",
-                                column="bias_corrected", fix="leave bias_corrected out")
+                                argument="bias_corrected", fix="leave bias_corrected out")
         from .theoh import theo_family
 
         return theo_family(y, fs, taus, kind, ci=ci, m_max=m_max, per_decade=per_decade)

@@ -37,7 +37,7 @@ def total_grid(n: int, taus="octave", kind: str = "totdev", *, m_max: int | None
         if ms.size == 0 or ms[0] < lo or ms[-1] > limit or (kind == "theo1" and (ms % 2).any()):
             what = "even averaging factors in" if kind == "theo1" else "averaging factors in"
             raise TooShortError(f"{kind} needs {what} {lo}..{limit} for {n} samples",
-                                column="taus", fix="pass smaller cluster sizes (samples, not s)")
+                                argument="taus", fix="pass smaller cluster sizes (samples, not s)")
         return tuple(int(m) for m in ms)
     top = min(top if m_max is None else int(m_max), limit)
     if top < lo:
@@ -59,7 +59,7 @@ def total_grid(n: int, taus="octave", kind: str = "totdev", *, m_max: int | None
     elif taus == "all":
         ms = np.arange(lo, top + 1, 2 if kind == "theo1" else 1)
     else:
-        raise TauGridError(f"unknown tau grid '{taus}'", column="taus",
+        raise TauGridError(f"unknown tau grid '{taus}'", argument="taus",
                            fix=f"use one of {', '.join(GRIDS)} or explicit cluster sizes")
     ms = np.unique(ms.astype(np.int64))
     keep = (ms >= lo) & (ms <= top) & ((ms % 2 == 0) if kind == "theo1" else True)
