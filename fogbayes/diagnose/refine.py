@@ -14,12 +14,13 @@ import numpy as np
 from .context import Context
 from .evidence import Screened, Whitened, _basis, whiten_columns, whitened_model
 from .fitting import ModelFit, fit_terms
+from .kinds import KINDS, kind_of
 from .terms import Term, columns
 
 #: sub-block positions per block tried by :func:`polish_step`
 STEP_SUBDIVISIONS = 20
-#: searched scale of each term kind that :func:`polish` re-scores after the decision
-SCALES = {"lag": "tau", "drift_exp": "tau", "hysteresis": "r0", "play": "width"}
+#: searched scale of each term kind that :func:`polish` re-scores (``Kind.scale_key``)
+SCALES = {k: v.scale_key for k, v in KINDS.items() if v.scale_key}
 #: times the scale grid is re-centred while its best value is at an edge
 RECENTRE_ROUNDS = 4
 #: most refits :func:`polish` makes while the scale keeps moving
@@ -41,7 +42,7 @@ def _local_terms(ctx: Context, s: Screened) -> list[Term]:
         edges = ctx.grid.t - 0.5 * ctx.grid.dt
         sel = edges[(edges >= lo) & (edges <= hi)]
         return [_with(term, time=float(t)) for t in sel]
-    key = SCALES.get(k)
+    key = kind_of(k).scale_key
     if key is not None:
         vals = np.array(sorted(g.params[key] for g in grid if g.kind == k))
         v = term.params[key]
@@ -121,10 +122,10 @@ def polish_step(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
 def polish_scale(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
     """``alt`` with its last term's searched scale re-scored under ``alt``'s noise (module doc).
 
-    Any term without a scale (:data:`SCALES`): ``alt`` unchanged.
+    Any term without a scale (``Kind.scale_key``): ``alt`` unchanged.
     """
     term = alt.terms[-1]
-    key = SCALES.get(term.kind)
+    key = kind_of(term.kind).scale_key
     if key is None:
         return alt
     wm = _whitened_under(ctx, base, alt)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+from .. import effects
 from ..diagnose import elpd as el
 from ..diagnose import evidence as ev
 from ..diagnose.compete import Duel, duel
@@ -19,12 +20,13 @@ from . import holdout
 SCREEN_GATE = 0.1
 #: Effects a chamber programme can tell apart (``fogbayes plan-chamber``,
 #: :mod:`fogbayes.plan.programme`): how fast and how long the chamber ramps and soaks.
-PROGRAMME_SEPARABLE = frozenset({"thermal_lag", "temperature_gradient", "temperature_rate"})
+PROGRAMME_SEPARABLE = frozenset(n for n, e in effects.REGISTRY.items() if e.separable_by_programme)
 
 
 def separable_by_programme(chosen: str, alternative: str) -> bool:
     """Whether another chamber programme could decide a duel the data left undecided."""
-    return {chosen, alternative} <= PROGRAMME_SEPARABLE
+    return all(n in effects.REGISTRY and effects.REGISTRY[n].separable_by_programme
+               for n in (chosen, alternative))
 
 
 def supported_trials(ctx, fit, trials, opts, n_cand: int, cache) -> list:

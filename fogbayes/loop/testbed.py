@@ -11,6 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import effects as fx
 from ..data import Recording
 from ..diagnose.terms import Term
 from ..simulate.registry import EFFECTS
@@ -26,8 +27,6 @@ NOISE_MIXES = {
     "walk": dict(N=0.003, B=0.01, K=0.05),
 }
 
-#: Parameters that set an effect's size (scaled by ``magnitude``).
-_SIZE_KEYS = ("coeff", "size", "amplitude", "slope", "k2", "k3", "asymmetry", "sigma")
 _SCENARIO = {"thermal": "thermal", "paper004": "paper004", "ratetable": "ratetable"}
 
 
@@ -42,7 +41,7 @@ class TestRecord(NamedTuple):
 def _scaled(name: str, magnitude: float, params: dict | None) -> dict:
     base = {k: v for k, v in EFFECTS[name].defaults.items()}
     out = {}
-    for k in _SIZE_KEYS:
+    for k in fx.get(name).size_keys:  # the parameters that set its size
         if k in base and base[k] is not None:
             out[k] = magnitude * base[k]
     if name == "temperature_order":  # the scenario's quadratic plus a cubic term

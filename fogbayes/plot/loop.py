@@ -10,19 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..diagnose.kinds import KINDS, kind_of
 from ..diagnose.terms import columns
 from ..preprocess.blocks import block_average
 from .style import COLORS, LEGEND_RIGHT, model_color, new_figure
 
-_DRIVER_LABELS = {"rate": "dT/dt [°C/min]", "rate_poly": "dT/dt [°C/min]",
-                  "hysteresis": "dT/dt [°C/min]", "drift_lin": "time [h]",
-                  "drift_exp": "time [h]", "step": "time [h]", "drift_tpoly": "time [h]",
-                  "omega_poly": "input rate [°/s]", "omega_abs": "input rate [°/s]",
-                  "omega_tpoly": "input rate [°/s]"}
-
-
 #: term kinds whose driver is time: their partial-residual panel would repeat the time panel
-TIME_DRIVEN = ("drift_lin", "drift_exp", "step", "drift_tpoly")
+TIME_DRIVEN = tuple(k for k, v in KINDS.items() if v.time_driven)
 
 
 def driver(term, cov):
@@ -32,23 +26,25 @@ def driver(term, cov):
     temperature rate in °C/min or the time in hours on the axis.
     """
     k, p = term.kind, term.params
-    if k in ("rate", "rate_poly", "hysteresis") and cov.Tdot is not None:
-        return np.asarray(cov.Tdot, float), _DRIVER_LABELS[k]
-    if k in ("drift_lin", "drift_exp", "step", "drift_tpoly"):
-        return np.asarray(cov.t, float) / 3600.0, _DRIVER_LABELS[k]
-    if k.startswith("omega") and cov.omega is not None:
-        return np.asarray(cov.omega, float), _DRIVER_LABELS[k]
-    if k in ("tpoly", "lag", "play") and "channel" in p:
+    kind = kind_of(k)
+    d = kind.driver
+    if d == "dT/dt" and cov.Tdot is not None:
+        return np.asarray(cov.Tdot, float), kind.driver_label
+    if d == "time":
+        return np.asarray(cov.t, float) / 3600.0, kind.driver_label
+    if d == "input_rate" and cov.omega is not None:
+        return np.asarray(cov.omega, float), kind.driver_label
+    if d == "channel" and "channel" in p:
         ch = p["channel"]
         j = ch if isinstance(ch, int) else list(cov.names).index(ch)
         name = cov.names[j] if j < len(cov.names) else "T"
         return np.asarray(cov.T[:, j], float), f"{name} [°C]"
-    if k == "gradient":
+    if d == "gradient":
         ja = p["a"] if isinstance(p["a"], int) else list(cov.names).index(p["a"])
         jb = p["b"] if isinstance(p["b"], int) else list(cov.names).index(p["b"])
         return (np.asarray(cov.T[:, jb] - cov.T[:, ja], float),
                 f"{cov.names[jb]} - {cov.names[ja]} [°C]")
-    if k == "periodic":
+    if d == "phase":
         return (np.asarray(cov.t, float) * float(p["frequency"])) % 1.0, \
             f"phase of the {1.0 / float(p['frequency']):.4g} s period [cycles]"
     return columns(term, cov)[:, 0], f"{k} term (centred and scaled, no unit)"
@@ -72,7 +68,7 @@ def step_figure(res, i: int):
     contrib = before.residual - s.fit.residual
     tc, cb = _blocks(t, contrib, out)
     ax[0].plot(tc / 3600, cb, color=model_color("loop"), label=f"model change:\n+ {s.effect}")
-    if s.term.kind in TIME_DRIVEN:
+    if kind_of(s.term.kind).time_driven:
         # the driver is time itself: against it the first panel would be drawn again, so
         # the second shows what the step leaves, the residual after it
         ta, ra = _blocks(t, s.fit.residual, out)

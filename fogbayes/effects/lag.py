@@ -1,0 +1,43 @@
+"""First-order lag of a sampled signal, tau dL/dt = u - L (the one implementation).
+
+Exact for u linear between samples: L_k = a_k L_{k-1} + (1 - c_k) u_k + (c_k - a_k) u_{k-1},
+a_k = exp(-h_k / tau), c_k = tau (1 - a_k) / h_k. Uniform steps by ``scipy.signal.lfilter``,
+otherwise an associative scan (JAX).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _scan(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """y_k = a_k y_{k-1} + b_k (y_{-1} = 0) by an associative scan."""
+    import jax
+    import jax.numpy as jnp
+
+    def comb(x, y):
+        return y[0] * x[0], y[0] * x[1] + y[1]
+
+    return np.asarray(jax.lax.associative_scan(comb, (jnp.asarray(a), jnp.asarray(b)))[1])
+
+
+def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
+                    initial: float | None = None) -> np.ndarray:
+    """L(t) of ``tau dL/dt = u - L`` (module doc); tau <= 0 returns ``u`` itself."""
+    from scipy.signal import lfilter
+
+    t, u = np.asarray(t, float), np.asarray(u, float)
+    if tau <= 0 or u.size < 2:
+        return u.copy()
+    y0 = float(u[0]) if initial is None else float(initial)
+    h = np.maximum(np.diff(t), 1e-12)
+    if np.ptp(h) <= 1e-9 * max(h[0], 1.0):
+        a = float(np.exp(-h[0] / tau))
+        c = float(-tau * np.expm1(-h[0] / tau) / h[0])  # tau (1 - a) / h without cancellation
+        b = [1.0 - c, c - a]
+        y, _ = lfilter(b, [1.0, -a], u, zi=[y0 - b[0] * u[0]])  # y0 = b0 u0 + z
+        return y
+    a = np.exp(-h / tau)
+    c = -tau * np.expm1(-h / tau) / h
+    b = (1.0 - c) * u[1:] + (c - a) * u[:-1]
+    return _scan(np.concatenate([[0.0], a]), np.concatenate([[y0], b]))

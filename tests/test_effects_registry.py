@@ -1,0 +1,185 @@
+"""The effect registry (fogbayes.effects): DESIGN.md's names, candidates on chamber and
+rate-table records, plants equal to the closed forms of fogbayes.simulate.effects (written
+separately), and an effect defined only here reaches the loop's candidates and the simulator."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fogbayes import effects
+from fogbayes.diagnose.candidates import EFFECTS, MAX_TIMES, candidates_for
+from fogbayes.diagnose.context import make_context
+from fogbayes.diagnose.terms import Term, columns, design
+from fogbayes.effects import Candidate, Effect
+from fogbayes.loop.bases import base_terms
+from fogbayes.loop.testbed import make_record
+from fogbayes.simulate import effects as fx
+from fogbayes.simulate import EFFECTS as SIM_EFFECTS
+from fogbayes.simulate import simulate
+from fogbayes.simulate._checks import SimulationParameterError
+from fogbayes.simulate.registry import resolve, term_covariates
+from fogbayes.simulate.truth import Covariates
+
+DESIGN = Path(__file__).resolve().parent.parent / "docs" / "DESIGN.md"
+RATE_TABLE = ("scale_factor_nonlinearity", "scale_factor_asymmetry", "scale_factor_temperature")
+
+
+def _design_names() -> list[str]:
+    text = DESIGN.read_text()
+    start = text.index("Effect names (the loop must know at least these)")
+    end = text.index("is a noise component", start)
+    return re.findall(r"`([a-z_]+)`", text[start:end])
+
+
+def test_the_registry_holds_designs_effect_names_in_its_order():
+    names = _design_names()
+    assert len(names) == 12 and names[-1] == "markov_noise"
+    assert list(effects.REGISTRY) == names
+    assert EFFECTS == tuple(names)  # the loop's view
+    assert set(SIM_EFFECTS) == set(names) | {"paper004"}  # the simulator's, plus paper 004's law
+    assert MAX_TIMES == {n: e.max_times for n, e in effects.REGISTRY.items() if e.max_times > 1}
+
+
+def _searched(eff: Effect) -> bool:
+    return type(eff).candidates is not Effect.candidates
+
+
+@pytest.fixture(scope="module")
+def contexts():
+    chamber = make_record(None, seed=11, duration=3 * 3600.0, fs=1.0)
+    table = make_record(None, seed=12, duration=3 * 3600.0, fs=1.0, profile="ratetable")
+    return {"thermal": make_context(chamber.recording, target_blocks=600),
+            "ratetable": make_context(table.recording, target_blocks=600)}
+
+
+@pytest.mark.parametrize("name", [n for n, e in effects.REGISTRY.items() if _searched(e)])
+def test_every_searched_effect_has_candidates_on_its_record(contexts, name):
+    ctx = contexts["ratetable" if name in RATE_TABLE else "thermal"]
+    base = base_terms(ctx, "bias-t")
+    got = effects.REGISTRY[name].candidates(ctx, base)
+    assert got and all(c.effect == name for c in got)
+    assert [c for c in candidates_for(ctx, base) if c.effect == name] == got
+    for c in got:
+        for term in c.grid:
+            assert term.params["effect"] == name
+            col = columns(term, ctx.cov)
+            assert np.all(np.isfinite(col)) and np.ptp(col) > 0  # a column that varies
+
+
+def test_an_effect_added_its_maximum_number_of_times_is_no_longer_a_candidate(contexts):
+    ctx = contexts["thermal"]
+    base = base_terms(ctx, "bias-t")
+    for name in ("step", "periodic", "time_drift"):
+        eff = effects.REGISTRY[name]
+        had = [Term("step", {"effect": name, "time": 100.0 * (i + 1)})
+               for i in range(eff.max_times)]
+        assert eff.candidates(ctx, base + had[:-1])
+        assert eff.candidates(ctx, base + had) == []
+
+
+@pytest.fixture(scope="module")
+def cov():
+    t = np.arange(0.0, 7200.0, 0.5)
+    T1 = 20.0 + 30.0 * np.sin(2 * np.pi * t / 5000.0)
+    T2 = 20.0 + 28.0 * np.sin(2 * np.pi * (t - 300.0) / 5000.0)
+    dTdt = 60.0 * 2 * np.pi / 5000.0 * 30.0 * np.cos(2 * np.pi * t / 5000.0)
+    w = 50.0 * np.sin(2 * np.pi * t / 900.0)
+    return Covariates(t, T1, np.column_stack([T1, T2]), dTdt, w, None, None)
+
+
+CLOSED = {  # the closed forms of fogbayes.simulate.effects at the full parameters
+    "temperature_order": lambda c, p: fx.temperature_order(c.temperature, **p),
+    "temperature_rate": lambda c, p: fx.temperature_rate(c.dTdt, **p),
+    "temperature_gradient": lambda c, p: fx.temperature_gradient(c.temperature,
+                                                                 c.temperatures[:, 1], **p),
+    "thermal_hysteresis": lambda c, p: fx.thermal_hysteresis(c.dTdt, T=c.temperature, **p),
+    "thermal_lag": lambda c, p: fx.thermal_lag(c.time, c.temperature, **p),
+    "time_drift": lambda c, p: fx.time_drift(c.time, **p),
+    "periodic": lambda c, p: fx.periodic(c.time, **p),
+    "step": lambda c, p: fx.step(c.time, **p),
+    "scale_factor_nonlinearity": lambda c, p: fx.scale_factor_nonlinearity(c.input_rate, **p),
+    "scale_factor_asymmetry": lambda c, p: fx.scale_factor_asymmetry(c.input_rate, **p),
+    "scale_factor_temperature": lambda c, p: fx.scale_factor_temperature(c.input_rate,
+                                                                         c.temperature, **p),
+}
+
+
+@pytest.mark.parametrize("name", [n for n, e in effects.REGISTRY.items() if _searched(e)])
+def test_the_plant_of_each_searched_effect_is_its_closed_form_at_the_defaults(cov, name):
+    eff = effects.REGISTRY[name]
+    p = eff.complete(dict(eff.defaults), cov)
+    pairs = eff.plant(p)
+    got = design([t for t, _ in pairs], term_covariates(cov)) @ np.concatenate(
+        [np.asarray(k, float) for _, k in pairs])
+    want = CLOSED[name](cov, p)
+    scale = float(np.max(np.abs(want)))
+    assert np.ptp(want) > 0  # not two constants compared
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * scale)
+
+
+class ThermalCross(Effect):
+    """b = k (T - T_ref) dT/dt on the existing t_rate kind: a test-only effect."""
+
+    name = "test_thermal_cross"
+    description = "k (T - T_ref) dT/dt (deg/h per deg C per deg C/min)"
+    defaults = {"coeff": 0.004, "T_ref": 20.0}
+    size_keys = ("coeff",)
+
+    def plant(self, p):
+        return [(Term("t_rate", {"channel": 0, "centre": p["T_ref"], "scale": 1.0,
+                                 "rate_scale": 1.0}), [p["coeff"]])]
+
+    def candidates(self, ctx, terms):
+        if any(t.kind == "t_rate" for t in terms):
+            return []
+        T = ctx.cov.T[:, 0]
+        return [Candidate(self.name, "linear", (Term("t_rate", {
+            "effect": self.name, "channel": 0, "centre": float(np.mean(T)),
+            "scale": max(float(np.ptp(T)), 1e-3), "rate_scale": 1.0}),),
+            ("temperature", "dT/dt"), None)]
+
+
+@pytest.fixture
+def registered():
+    effects.register(ThermalCross)
+    try:
+        yield effects.REGISTRY[ThermalCross.name]
+    finally:
+        effects.unregister(ThermalCross.name)
+
+
+def test_an_effect_defined_in_a_test_reaches_the_candidates_and_the_simulator(contexts,
+                                                                              registered):
+    name = registered.name
+    ctx = contexts["thermal"]
+    base = base_terms(ctx, "bias-t")
+    found = [c for c in candidates_for(ctx, base) if c.effect == name]
+    assert len(found) == 1 and found[0].grid[0].kind == "t_rate"
+    assert [c.effect for c in candidates_for(ctx, base, effects=(name,))] == [name]
+    assert candidates_for(ctx, base)[-1].effect == "periodic"  # spectral ones stay last
+
+    assert name in SIM_EFFECTS
+    sim = simulate("thermal", seed=3, duration=3600.0, fs=1.0,
+                   effects={name: {"coeff": 0.01}})
+    c = sim.truth.covariates
+    want = 0.01 * (c.temperature - 20.0) * c.dTdt
+    assert np.ptp(want) > 0.1
+    np.testing.assert_allclose(sim.truth.effects[name], want, rtol=0, atol=1e-12 * np.ptp(want))
+    assert sim.truth.params["effects"][name] == {"coeff": 0.01, "T_ref": 20.0}
+
+    rec = make_record(name, seed=4, duration=3600.0, fs=1.0, magnitude=3.0)
+    assert rec.effect_params["coeff"] == pytest.approx(3.0 * 0.004, rel=1e-12)
+
+
+def test_an_unregistered_effect_is_gone_again():
+    assert ThermalCross.name not in effects.REGISTRY
+    cov = Covariates(np.arange(3.0), np.zeros(3), np.zeros((3, 1)), np.zeros(3), None, None,
+                     None)
+    with pytest.raises(SimulationParameterError, match="unknown effect"):
+        resolve(ThermalCross.name, None, cov)
+    with pytest.raises(ValueError, match="already registered"):
+        effects.register(effects.REGISTRY["step"])
