@@ -175,6 +175,18 @@ def test_an_effect_defined_in_a_test_reaches_the_candidates_and_the_simulator(co
     assert rec.effect_params["coeff"] == pytest.approx(3.0 * 0.004, rel=1e-12)
 
 
+def test_an_effect_registered_at_runtime_is_found_by_the_loop(registered):
+    """run_loop's default effect list reads the registry when it runs: planted at 10x its
+    default, the test-only effect is the loop's first step."""
+    from fogbayes.loop import run_loop
+    from fogbayes.loop.bases import allowed
+
+    assert registered.name in allowed("bias-t")
+    rec = make_record(registered.name, seed=4, duration=3600.0, fs=1.0, magnitude=10.0)
+    res = run_loop(rec.recording, "bias-t", max_steps=1, n_sims=50, n_refit=1)
+    assert res.effects == [registered.name]
+
+
 def test_an_unregistered_effect_is_gone_again():
     assert ThermalCross.name not in effects.REGISTRY
     cov = Covariates(np.arange(3.0), np.zeros(3), np.zeros((3, 1)), np.zeros(3), None, None,

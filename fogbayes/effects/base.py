@@ -39,7 +39,9 @@ class Effect:
     requires: covariates the simulated scenario must have ("input_rate", "temperature_2");
     same_on_top: parameters that must agree for :meth:`on_top`; max_times: how often the
     loop may add it; separable_by_programme: a chamber programme can tell it from the others
-    so marked; stochastic: drawn by the scenario's noise, not planted.
+    so marked; stochastic: drawn by the scenario's noise, not planted; what: the phrase a
+    separability warning names it by ("" = not examined for separability); remedy: the
+    programme change that separates it ("" = the general one).
     """
 
     name: str = ""
@@ -52,6 +54,8 @@ class Effect:
     max_times: int = 1
     separable_by_programme: bool = False
     stochastic: bool = False
+    what: str = ""
+    remedy: str = ""
 
     def plant(self, p: dict) -> Planted:
         raise NotImplementedError
@@ -66,6 +70,11 @@ class Effect:
 
     def candidates(self, ctx, terms) -> list[Candidate]:
         return []
+
+    def oracle(self, ctx, p: dict) -> list[Term]:
+        """The planted effect at its true parameters ``p`` as the loop's terms (the true model
+        is the base plus these)."""
+        raise NotImplementedError(f"effect {self.name!r} has no oracle terms")
 
 
 def count(terms, effect: str) -> int:

@@ -21,6 +21,9 @@ class Periodic(Effect):
         return [(Term("periodic", {"frequency": p["frequency"]}),
                  [a * np.cos(ph), a * np.sin(ph)])]
 
+    def oracle(self, ctx, p):
+        return [Term("periodic", {"frequency": p.get("frequency", 1 / 600)})]
+
     def candidates(self, ctx, terms):
         if count(terms, self.name) >= self.max_times:
             return []

@@ -13,6 +13,11 @@ class _OnRateTable(Effect):
     requires = ("input_rate",)
 
 
+def _ws(ctx) -> float:
+    """The input rate's scale (1 without an input rate)."""
+    return wscale(ctx) if ctx.cov.omega is not None else 1.0
+
+
 class ScaleFactorNonlinearity(_OnRateTable):
     name = "scale_factor_nonlinearity"
     description = "3600 (k2 w^2 + k3 w^3) deg/h, w in deg/s"
@@ -23,6 +28,9 @@ class ScaleFactorNonlinearity(_OnRateTable):
     def plant(self, p):
         return [(Term("omega_poly", {"powers": [2, 3], "scale": 1.0}),
                  [3600.0 * p["k2"], 3600.0 * p["k3"]])]
+
+    def oracle(self, ctx, p):
+        return [Term("omega_poly", {"powers": [2, 3], "scale": _ws(ctx)})]
 
     def candidates(self, ctx, terms):
         if not rate_table(ctx):
@@ -47,6 +55,9 @@ class ScaleFactorAsymmetry(_OnRateTable):
     def plant(self, p):
         return [(Term("omega_abs", {"scale": 1.0}), [1800.0 * p["asymmetry"]])]
 
+    def oracle(self, ctx, p):
+        return [Term("omega_abs", {"scale": _ws(ctx)})]
+
     def candidates(self, ctx, terms):
         if not rate_table(ctx) or "omega_abs" in {tm.kind for tm in terms}:
             return []
@@ -63,6 +74,11 @@ class ScaleFactorTemperature(_OnRateTable):
     def plant(self, p):
         return [(Term("omega_tpoly", {"channel": 0, "powers": [1], "centre": p["T_ref"],
                                       "t_scale": 1.0, "scale": 1.0}), [3600.0 * p["coeff"]])]
+
+    def oracle(self, ctx, p):
+        c, s = tscale(ctx)
+        return [Term("omega_tpoly", {"channel": 0, "powers": [1], "centre": c, "t_scale": s,
+                                     "scale": _ws(ctx)})]
 
     def candidates(self, ctx, terms):
         cov = ctx.cov

@@ -15,6 +15,9 @@ class MarkovNoise(Effect):
     size_keys = ("sigma",)
     stochastic = True
 
+    def oracle(self, ctx, p):
+        return []
+
 
 class Paper004(Effect):
     name = "paper004"

@@ -11,6 +11,7 @@ from .base import Candidate, Effect, count, e
 
 class Step(Effect):
     name = "step"
+    what = "a step"
     applies = "run"
     description = "bias step of `size` deg/h at `time` s (default: mid-record)"
     defaults = {"time": None, "size": 0.2}
@@ -24,6 +25,9 @@ class Step(Effect):
         if p["time"] is None:
             p["time"] = float(cov.time[0] + 0.5 * (cov.time[-1] - cov.time[0]))
         return p
+
+    def oracle(self, ctx, p):
+        return [Term("step", {"time": p.get("time", 0.0)})]
 
     def candidates(self, ctx, terms):
         if count(terms, self.name) >= self.max_times:

@@ -10,6 +10,7 @@ from .base import Candidate, Effect, e, thermal
 
 class TemperatureGradient(Effect):
     name = "temperature_gradient"
+    what = "a gradient term"
     description = "k (T2 - T1) between the two channels (deg/h per deg C)"
     defaults = {"coeff": 0.03}
     size_keys = ("coeff",)
@@ -18,6 +19,9 @@ class TemperatureGradient(Effect):
 
     def plant(self, p):
         return [(Term("gradient", {"a": 0, "b": 1, "scale": 1.0}), [p["coeff"]])]
+
+    def oracle(self, ctx, p):
+        return [Term("gradient", {"a": 0, "b": 1, "scale": 1.0})]
 
     def candidates(self, ctx, terms):
         cov = ctx.cov

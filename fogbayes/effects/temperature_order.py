@@ -8,6 +8,7 @@ from .base import Candidate, Effect, count, e, thermal, tpoly, tscale
 
 class TemperatureOrder(Effect):
     name = "temperature_order"
+    what = "a higher power of T"
     description = "bias polynomial in temperature, sum_i c_i (T - T_ref)^i (deg/h)"
     defaults = {"coeffs": [0.0, 0.0, 0.0, 2e-6], "T_ref": 20.0}
     same_on_top = ("T_ref",)
@@ -24,6 +25,10 @@ class TemperatureOrder(Effect):
         n = max(len(a), len(c))
         a, c = a + [0.0] * (n - len(a)), c + [0.0] * (n - len(c))
         return {**mine, "coeffs": [float(x + y) for x, y in zip(a, c)]}
+
+    def oracle(self, ctx, p):
+        c, s = tscale(ctx)
+        return [Term("tpoly", {"channel": 0, "powers": [3], "centre": c, "scale": s})]
 
     def candidates(self, ctx, terms):
         if not thermal(ctx):

@@ -8,6 +8,7 @@ from .base import Candidate, Effect, e, moving, rate_scale, thermal
 
 class TemperatureRate(Effect):
     name = "temperature_rate"
+    what = "a Shupe (dT/dt) term"
     description = "Shupe term k dT/dt (deg/h per deg C/min)"
     defaults = {"coeff": 0.3}
     size_keys = ("coeff",)
@@ -15,6 +16,9 @@ class TemperatureRate(Effect):
 
     def plant(self, p):
         return [(Term("rate", {"scale": 1.0}), [p["coeff"]])]
+
+    def oracle(self, ctx, p):
+        return [Term("rate", {"scale": 1.0})]
 
     def candidates(self, ctx, terms):
         if not thermal(ctx) or not moving(ctx) or {tm.kind for tm in terms} & {"rate", "rate_poly"}:

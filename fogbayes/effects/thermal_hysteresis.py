@@ -11,6 +11,7 @@ from .base import Candidate, Effect, e, moving, rate_scale, thermal
 
 class ThermalHysteresis(Effect):
     name = "thermal_hysteresis"
+    what = "hysteresis"
     description = ("(h/2) tanh(dT/dt / r0): bias h higher heating than cooling (deg/h); with "
                    "width w (deg C) the memory form (h/2) (T - P_w[T]) / (w/2), P_w the play "
                    "operator")
@@ -21,6 +22,9 @@ class ThermalHysteresis(Effect):
         if p.get("width") is not None:
             return [(Term("play", {"channel": 0, "width": p["width"]}), [0.5 * p["size"]])]
         return [(Term("hysteresis", {"r0": p["rate_scale"]}), [0.5 * p["size"]])]
+
+    def oracle(self, ctx, p):
+        return [Term("hysteresis", {"r0": p.get("rate_scale", 0.05)})]
 
     def candidates(self, ctx, terms):
         if not thermal(ctx) or not moving(ctx) or \

@@ -10,6 +10,7 @@ from .base import Candidate, Effect, e, moving, thermal, tscale
 
 class ThermalLag(Effect):
     name = "thermal_lag"
+    what = "a thermal lag"
     description = "k (T_lag - T_ref), T_lag = T through a first-order lag tau (s)"
     defaults = {"coeff": 0.01, "tau": 1800.0, "T_ref": 20.0}
     size_keys = ("coeff",)
@@ -18,6 +19,11 @@ class ThermalLag(Effect):
     def plant(self, p):
         return [(Term("lag", {"channel": 0, "tau": p["tau"], "centre": p["T_ref"],
                               "scale": 1.0}), [p["coeff"]])]
+
+    def oracle(self, ctx, p):
+        c, s = tscale(ctx)
+        return [Term("lag", {"channel": 0, "tau": p.get("tau", 1800.0), "centre": c,
+                             "scale": s})]
 
     def candidates(self, ctx, terms):
         if not thermal(ctx) or not moving(ctx) or "lag" in {tm.kind for tm in terms}:

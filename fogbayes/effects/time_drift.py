@@ -10,6 +10,10 @@ from .base import Candidate, Effect, count, e
 
 class TimeDrift(Effect):
     name = "time_drift"
+    what = "a warm-up or drift"
+    remedy = ("start the programme with a constant-temperature soak of a few warm-up "
+              "time constants before the first ramp (fogbayes plan-chamber scores "
+              "programmes)")
     description = "s t/3600 + A (1 - exp(-t/tau)): drift and warm-up (deg/h)"
     defaults = {"slope": 0.0, "amplitude": 1.0, "tau": 5400.0}
     size_keys = ("amplitude", "slope")
@@ -19,6 +23,10 @@ class TimeDrift(Effect):
         return [(Term("drift_lin", {"duration": 3600.0}), [p["slope"]]),
                 (Term("intercept", {}), [p["amplitude"]]),
                 (Term("drift_exp", {"tau": p["tau"]}), [-p["amplitude"]])]
+
+    def oracle(self, ctx, p):
+        return [Term("drift_exp", {"tau": p.get("tau", 5400.0)})] + (
+            [Term("drift_lin", {"duration": ctx.cov.duration})] if p.get("slope") else [])
 
     def candidates(self, ctx, terms):
         if count(terms, self.name) >= self.max_times:

@@ -13,21 +13,28 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnose.candidates import EFFECTS
 from ..diagnose.context import Context
 from ..diagnose.terms import Term
 from ..errors import FogbayesError, MissingColumnError
 from ..composite.model import OrdersError, read_orders
+from ..effects import REGISTRY
 
 MODELS = ("bias-t", "thermal", "composite", "allan")
 
-#: Effects the loop may add to each base model.
-ALLOWED = {
-    "bias-t": EFFECTS,
-    "thermal": EFFECTS,
-    "composite": EFFECTS,
+#: Effects the loop may add to each base model (None: every registered effect, read at call
+#: time by :func:`allowed`, so an effect registered at runtime reaches the loop).
+ALLOWED: dict[str, tuple[str, ...] | None] = {
+    "bias-t": None,
+    "thermal": None,
+    "composite": None,
     "allan": ("markov_noise", "periodic"),
 }
+
+
+def allowed(model: str) -> tuple[str, ...]:
+    """The effect names the loop may add to ``model``, in registry order."""
+    names = ALLOWED[model]
+    return tuple(REGISTRY) if names is None else names
 
 
 class ModelNameError(FogbayesError):

@@ -18,7 +18,8 @@ import numpy as np
 from ..diagnose import elpd as el
 from ..diagnose.bartlett import bartlett_factor, in_walk_mode, leaves_walk_mode
 from ..diagnose import evidence as ev
-from ..diagnose.candidates import EFFECTS, candidates_for
+from ..diagnose.candidates import candidates_for
+from ..effects import REGISTRY
 from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
 from ..diagnose.noise_prior import NoisePrior
@@ -30,7 +31,7 @@ from ..inference import noise_fit as nfit
 from ..thermal.workflow import DEFAULT_ORDERS
 from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
-from .bases import ALLOWED, base_terms
+from .bases import ALLOWED, allowed as allowed_for, base_terms
 from .calibration import calibration_json, input_json
 from .constant import ieee_constant
 from .separable import detectability, separability_warnings
@@ -282,7 +283,7 @@ def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps
 
 def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
          target_blocks, noise_prior) -> LoopResult:
-    allowed = tuple(e for e in ALLOWED[model] if effects is None or e in effects) \
+    allowed = tuple(e for e in allowed_for(model) if effects is None or e in effects) \
         if model in ALLOWED else effects
     opts = Options(max_steps, alpha, n_sims, n_refit, seed, allowed, target_blocks)
     tell(0, max_steps, f"fitting the {model} base")
@@ -323,7 +324,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         if not cmp.kept:  # supported in-sample, worse out of it
             held_out.append({"effect": s.candidate.effect, **evid["holdout"]})
             opts = opts._replace(effects=tuple(
-                e for e in (opts.effects or EFFECTS) if e != s.candidate.effect))
+                e for e in (opts.effects or tuple(REGISTRY)) if e != s.candidate.effect))
             continue
         noise_rows += rows
         m1 = _metrics(ctx, new, seed, cache)

@@ -17,6 +17,7 @@ from ..diagnose.candidates import candidates_for
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
 from ..diagnose.terms import columns
+from ..effects import REGISTRY
 from ..inference import noise_ssm as ns
 
 #: share of an effect the base already fits beyond which it is reported as confounded
@@ -27,15 +28,9 @@ POWER_Z = stats.norm.ppf(0.8)
 #: grid points examined per searched candidate (evenly spaced over its grid)
 MAX_GRID = 12
 
-WHAT = {"time_drift": "a warm-up or drift", "step": "a step",
-        "temperature_rate": "a Shupe (dT/dt) term", "thermal_hysteresis": "hysteresis",
-        "thermal_lag": "a thermal lag", "temperature_gradient": "a gradient term",
-        "temperature_order": "a higher power of T"}
-REMEDY = {
-    "time_drift": "start the programme with a constant-temperature soak of a few warm-up "
-                  "time constants before the first ramp (fogbayes plan-chamber scores "
-                  "programmes)",
-}
+#: each effect's phrase in a separability warning (the registry's ``what``; study scripts
+#: read it): only effects that have one are examined
+WHAT = {n: e.what for n, e in REGISTRY.items() if e.what}
 REMEDY_WALK = ("a static run's noise prior caps the walk (fogbayes allan static.csv --json "
                "static.json, then fogbayes loop --noise-prior static.json)")
 REMEDY_DEFAULT = ("a programme that moves this driver apart from the base's (ramps at two "
@@ -101,7 +96,7 @@ def detectability(ctx: Context, fit: ModelFit, alpha: float, effects=None) -> li
     could go unseen, with and without the walk, and how much of it the base already fits
     under the noise without the walk (the programme's part; module doc)."""
     cands = [c for c in candidates_for(ctx, fit.terms, effects=effects)
-             if c.kind == "linear" and c.effect in WHAT]
+             if c.kind == "linear" and REGISTRY[c.effect].what]
     if not cands:
         return []
     nf = fit.noise
@@ -143,18 +138,19 @@ def separability_warnings(rows: list[dict], rms: float) -> list[str]:
         if r["confounded_with"] and d0 > rms:
             at = f", {r['share_at']}" if r["share_at"] else ""
             size = "any size" if d0 > 1e6 * rms else f"up to {d0:.3g} deg/h"
-            out.append(f"{WHAT[r['effect']]} ({r['effect']}{at}) cannot be told apart from "
+            what = REGISTRY[r["effect"]].what
+            out.append(f"{what} ({r['effect']}{at}) cannot be told apart from "
                        f"the base's {r['confounded_with']} on this programme "
                        f"({100 * r['share_fitted_by_base']:.0f} % of it is what the base "
                        f"fits): one of {size} would go unseen, fitted as the "
                        f"{r['confounded_with']} and carried so to runs under another "
                        f"programme; remedy: "
-                       f"{REMEDY.get(r['effect'], REMEDY_DEFAULT)}")
+                       f"{REGISTRY[r['effect']].remedy or REMEDY_DEFAULT}")
         elif d > WALK_WARN * d0 and d > rms:
             walk.append(r)
     if walk:
         walk.sort(key=lambda r: -r["detectable_deg_h"])
-        sizes = "; ".join(f"{WHAT[r['effect']]} ({r['effect']}) up to "
+        sizes = "; ".join(f"{REGISTRY[r['effect']].what} ({r['effect']}) up to "
                           f"{r['detectable_deg_h']:.3g} deg/h "
                           f"({r['detectable_without_walk_deg_h']:.3g} without the walk)"
                           for r in walk)

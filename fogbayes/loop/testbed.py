@@ -13,7 +13,6 @@ import numpy as np
 
 from .. import effects as fx
 from ..data import Recording
-from ..diagnose.terms import Term
 from ..simulate.registry import EFFECTS
 from ..simulate.scenarios import simulate
 
@@ -80,27 +79,6 @@ def make_record(effect: str | None = None, *, seed: int, duration: float = 3 * 3
 
 
 def oracle_terms(ctx, base, effect: str, params: dict):
-    """The true model as loop terms (base + the planted effect at its true parameters)."""
-    T = ctx.cov.T[:, 0]
-    c, s = 0.5 * (T.max() + T.min()), max(0.5 * np.ptp(T), 1e-3)
-    ws = max(float(np.max(np.abs(ctx.cov.omega))), 1e-9) if ctx.cov.omega is not None else 1.0
-    extra = {
-        "temperature_order": [Term("tpoly", {"channel": 0, "powers": [3], "centre": c,
-                                             "scale": s})],
-        "temperature_rate": [Term("rate", {"scale": 1.0})],
-        "temperature_gradient": [Term("gradient", {"a": 0, "b": 1, "scale": 1.0})],
-        "thermal_hysteresis": [Term("hysteresis", {"r0": params.get("rate_scale", 0.05)})],
-        "thermal_lag": [Term("lag", {"channel": 0, "tau": params.get("tau", 1800.0),
-                                     "centre": c, "scale": s})],
-        "time_drift": [Term("drift_exp", {"tau": params.get("tau", 5400.0)})]
-        + ([Term("drift_lin", {"duration": ctx.cov.duration})] if params.get("slope") else []),
-        "periodic": [Term("periodic", {"frequency": params.get("frequency", 1 / 600)})],
-        "step": [Term("step", {"time": params.get("time", 0.0)})],
-        "scale_factor_nonlinearity": [Term("omega_poly", {"powers": [2, 3], "scale": ws})],
-        "scale_factor_asymmetry": [Term("omega_abs", {"scale": ws})],
-        "scale_factor_temperature": [Term("omega_tpoly", {"channel": 0, "powers": [1],
-                                                          "centre": c, "t_scale": s,
-                                                          "scale": ws})],
-        "markov_noise": [],
-    }[effect]
-    return list(base) + extra
+    """The true model as loop terms: base + the planted effect at its true parameters
+    (:meth:`fogbayes.effects.Effect.oracle`)."""
+    return list(base) + fx.get(effect).oracle(ctx, params)
