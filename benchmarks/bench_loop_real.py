@@ -123,7 +123,7 @@ def _err(t, model_det, true_det, flag) -> float:
 def oracle(ctx, base, effect_col, spec=None):
     """True-form GLS fit: base terms + the planted effect's true shape (free amplitude),
     under the noise structure ``spec`` (default: the loop's base one)."""
-    from fogbayes.diagnose.terms import design
+    from fogbayes.effects.terms import design
     from fogbayes.inference import noise_fit as nfit
 
     X = ctx.block_design(list(base))

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fogbayes.diagnose.kinds import KINDS
+from fogbayes.effects.kinds import KINDS
 from fogbayes.simulate.registry import EFFECTS, resolve
 from fogbayes.simulate.truth import Covariates
 

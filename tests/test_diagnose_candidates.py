@@ -9,7 +9,7 @@ from fogbayes.data import Metadata, Recording
 from fogbayes.diagnose.candidates import EFFECTS, candidates_for
 from fogbayes.diagnose.context import make_context, spike_flags
 from fogbayes.diagnose.covariates import block_grid
-from fogbayes.diagnose.terms import Term, columns, first_order_lag
+from fogbayes.effects.terms import Term, columns, first_order_lag
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
 from fogbayes.simulate.profiles import first_order_lag as sim_lag

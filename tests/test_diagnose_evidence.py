@@ -10,7 +10,7 @@ from scipy import special, stats
 
 from fogbayes.diagnose import evidence as ev
 from fogbayes.diagnose.candidates import Candidate
-from fogbayes.diagnose.terms import Term
+from fogbayes.effects.terms import Term
 
 
 def test_log_chi2_tail_matches_closed_forms_beyond_underflow():

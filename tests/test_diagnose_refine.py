@@ -24,7 +24,7 @@ from fogbayes.diagnose.refine import (
     polish_scale,
     polish_step,
 )
-from fogbayes.diagnose.terms import Term
+from fogbayes.effects.terms import Term
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
 

@@ -9,7 +9,7 @@ from fogbayes.data import Metadata, Recording
 from fogbayes.diagnose.context import make_context
 from fogbayes.diagnose.fitting import fit_terms
 from fogbayes.diagnose.scans import scan_unexplained
-from fogbayes.diagnose.terms import Term
+from fogbayes.effects.terms import Term
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.kinds import KINDS
-from fogbayes.diagnose.terms import Term, columns, describe, labels
+from fogbayes.effects.kinds import KINDS
+from fogbayes.effects.terms import Term, columns, describe, labels
 from fogbayes.simulate import effects as fx
 from fogbayes.simulate.registry import EFFECTS, resolve, term_covariates
 from fogbayes.simulate.truth import Covariates

@@ -13,7 +13,7 @@ import pytest
 from fogbayes import effects
 from fogbayes.diagnose.candidates import EFFECTS, MAX_TIMES, candidates_for
 from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.terms import Term, columns, design
+from fogbayes.effects.terms import Term, columns, design
 from fogbayes.effects import Candidate, Effect
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record

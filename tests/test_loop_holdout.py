@@ -10,7 +10,7 @@ import pytest
 
 from fogbayes.diagnose.context import make_context
 from fogbayes.diagnose.fitting import fit_terms
-from fogbayes.diagnose.terms import Term
+from fogbayes.effects.terms import Term
 from fogbayes.loop import holdout
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record

@@ -11,7 +11,7 @@ import pytest
 from fogbayes.diagnose.candidates import candidates_for
 from fogbayes.diagnose.context import make_context
 from fogbayes.diagnose.fitting import fit_terms
-from fogbayes.diagnose.terms import Term
+from fogbayes.effects.terms import Term
 from fogbayes.inference import noise_ssm as ns
 from fogbayes.loop import holdout
 from fogbayes.loop.bases import base_terms

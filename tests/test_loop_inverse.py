@@ -10,7 +10,7 @@ import numpy as np
 
 from fogbayes.composite.compensate import monotone_bounds
 from fogbayes.diagnose.covariates import Covariates
-from fogbayes.diagnose.terms import Term
+from fogbayes.effects.terms import Term
 from fogbayes.loop.compensate import rate_polynomial, solve_rate
 
 

@@ -10,7 +10,7 @@ from .candidates import EFFECTS, Candidate, candidates_for
 from .context import Context, make_context
 from .fitting import ModelFit, fit_terms
 from .noise_prior import NoisePrior, read_noise_prior
-from .terms import Term
+from ..effects.terms import Term
 
 __all__ = ["EFFECTS", "Candidate", "Context", "ModelFit", "NoisePrior", "Term",
            "candidates_for", "fit_terms", "make_context", "read_noise_prior"]

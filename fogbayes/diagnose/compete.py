@@ -20,7 +20,7 @@ from .evidence import Screened, Whitened, _basis, whitened_model
 from .fitting import ModelFit, fit_terms
 from .refine import _local_terms
 from .reml import with_reml
-from .terms import Term, columns
+from ..effects.terms import Term, columns
 
 LEVEL = 0.05
 

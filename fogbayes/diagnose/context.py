@@ -13,7 +13,7 @@ import numpy as np
 
 from ..inference.noise_ssm import NoiseSpec, make_spec
 from .covariates import BlockGrid, Covariates, block_covariates, block_grid, covariates_of
-from .terms import Term, columns
+from ..effects.terms import Term, columns
 
 MAD_TO_SIGMA = 1.4826
 

@@ -21,7 +21,7 @@ from . import nullsim
 from .candidates import Candidate
 from .context import Context
 from .fitting import ModelFit
-from .terms import Term, columns
+from ..effects.terms import Term, columns
 
 ALPHA = 0.01
 

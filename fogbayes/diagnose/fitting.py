@@ -14,7 +14,7 @@ import numpy as np
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 from .context import Context
-from .terms import Term, design
+from ..effects.terms import Term, design
 
 
 class ModelFit(NamedTuple):

@@ -17,7 +17,7 @@ from ..inference import noise_fit as nfit
 from . import nullsim
 from .context import Context
 from .fitting import ModelFit
-from .terms import Term, design
+from ..effects.terms import Term, design
 
 N_TAU, N_VAR = 8, 13
 

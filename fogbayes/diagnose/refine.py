@@ -14,8 +14,8 @@ import numpy as np
 from .context import Context
 from .evidence import Screened, Whitened, _basis, whiten_columns, whitened_model
 from .fitting import ModelFit, fit_terms
-from .kinds import KINDS, kind_of
-from .terms import Term, columns
+from ..effects.kinds import KINDS, kind_of
+from ..effects.terms import Term, columns
 
 #: sub-block positions per block tried by :func:`polish_step`
 STEP_SUBDIVISIONS = 20

@@ -158,7 +158,7 @@ def basis_from_loop(doc: dict, *, source: str | None = None) -> tuple[PolyBasis,
     calibration run (a step, a linear drift, a periodic term) are not part of the sensor
     and are left out.
     """
-    from ..diagnose.kinds import kind_of  # the loop's term kinds (the package imports JAX)
+    from ..effects.kinds import kind_of  # the loop's term kinds (imported on use: numba)
 
     cal = doc["calibration"]
     powers, coef, where, i = [], [], None, 0

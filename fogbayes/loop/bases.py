@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..diagnose.context import Context
-from ..diagnose.terms import Term
+from ..effects.terms import Term
 from ..errors import FogbayesError, MissingColumnError
 from ..composite.model import OrdersError, read_orders
 from ..effects import REGISTRY

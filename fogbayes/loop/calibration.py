@@ -3,7 +3,7 @@
 Section ``calibration`` of ``fogbayes.loop/1`` (family, terms, coefficients in deg/h on the
 scaled columns, stderr, covariance, processing, valid ranges, noise), read by ``fogbayes
 compensate --params``. bias(t) = sum_j X_j(cov(t)) c_j, the columns of
-:mod:`fogbayes.diagnose.terms` on the new recording's covariates. Bias family: output - bias;
+:mod:`fogbayes.effects.terms` on the new recording's covariates. Bias family: output - bias;
 composite: W solving U = f(W, T, t) (:func:`fogbayes.loop.compensate.solve_rate`). Terms with
 ``applies: "run"`` are carried only with ``run_events=True``; warm-up time counts from the first sample.
 """
@@ -16,7 +16,7 @@ import numpy as np
 
 from ..diagnose.context import spike_flags
 from ..diagnose.covariates import block_grid, covariates_of
-from ..diagnose.terms import KINDS, Term, design, labels
+from ..effects.terms import KINDS, Term, design, labels
 from ..data.units import convert_rate
 from .compensate import solve_rate
 from .noise_model import components

@@ -12,7 +12,7 @@ import math
 import re
 
 from ..data.doc_models import _scan
-from ..diagnose.kinds import KINDS
+from ..effects.kinds import KINDS
 from ..data.doc_rules import (COEF_LIMIT, LOOP_SCHEMA, LOOP_SCHEMA_NAME, LOOP_SCHEMA_VERSION,
                               MAX_ORDER, FitDocumentError, _Checker, _kind, is_loop_document)
 

@@ -14,8 +14,8 @@ from ..composite.compensate import invert_polynomial
 from ..diagnose.context import Context
 from ..diagnose.covariates import Covariates
 from ..diagnose.fitting import ModelFit
-from ..diagnose.kinds import kind_of
-from ..diagnose.terms import columns, design
+from ..effects.kinds import kind_of
+from ..effects.terms import columns, design
 from ..errors import FogbayesError
 from ..data.units import convert_rate
 

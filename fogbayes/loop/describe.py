@@ -2,11 +2,11 @@
 
 Coefficients are fitted on centred/scaled columns; each term kind turns them back into
 physical units (deg/h and the covariate's own unit) in its ``describe``
-(:mod:`fogbayes.diagnose.kinds`).
+(:mod:`fogbayes.effects.kinds`).
 """
 
 from __future__ import annotations
 
-from ..diagnose.terms import describe
+from ..effects.terms import describe
 
 __all__ = ["describe"]

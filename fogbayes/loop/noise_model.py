@@ -17,7 +17,7 @@ import numpy as np
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
 from ..diagnose.markov import markov_log_p, markov_start, refit_markov
-from ..diagnose.terms import design
+from ..effects.terms import design
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 

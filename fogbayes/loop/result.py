@@ -16,7 +16,7 @@ from ..support.jsonable import to_jsonable
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
 from ..diagnose.noise_prior import NoisePrior
-from ..diagnose.terms import Term
+from ..effects.terms import Term
 from .metrics import Metrics
 from .noise_model import components
 

@@ -16,7 +16,7 @@ from ..diagnose import evidence as ev
 from ..diagnose.candidates import candidates_for
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
-from ..diagnose.terms import columns
+from ..effects.terms import columns
 from ..effects import REGISTRY
 from ..inference import noise_ssm as ns
 

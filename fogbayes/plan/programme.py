@@ -14,7 +14,7 @@ import numpy as np
 
 from ..diagnose.context import make_context
 from ..diagnose.evidence import whiten_columns
-from ..diagnose.terms import Term
+from ..effects.terms import Term
 from ..loop.bases import base_terms
 from ..simulate.profiles import Ramp, Soak, segments_json, thermal_test_segments
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnose.kinds import KINDS, kind_of
-from ..diagnose.terms import columns
+from ..effects.kinds import KINDS, kind_of
+from ..effects.terms import columns
 from ..preprocess.blocks import block_average
 from .style import COLORS, LEGEND_RIGHT, model_color, new_figure
 

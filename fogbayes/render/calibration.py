@@ -35,12 +35,12 @@ def physical_rows(cal: dict) -> list[tuple[str, str, str, str]]:
     bias = sum_j a_j T^j with T in °C (origin 0 °C): with z = (T - c) / s,
     c_k z^k = c_k s^-k sum_j binom(k, j) (-c)^(k-j) T^j, so a = A beta and the standard
     errors are sqrt(diag(A Cov A^T)) from the document's covariance. Every other term is
-    read by its kind (:func:`fogbayes.diagnose.terms.describe`), the phrase of the loop
+    read by its kind (:func:`fogbayes.effects.terms.describe`), the phrase of the loop
     report (:func:`fogbayes.render.effects.effect_phrase`).
     """
     from math import comb
 
-    from ..diagnose.terms import Term, describe
+    from ..effects.terms import Term, describe
     from .effects import effect_phrase
     from .html import fmt
     from .labels import coefficient_unit

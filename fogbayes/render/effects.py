@@ -1,6 +1,6 @@
 """An added effect in words: its size in physical units and the parameter the loop searched.
 
-One phrase per ``steps[].detail`` (:func:`fogbayes.diagnose.terms.describe`), e.g.
+One phrase per ``steps[].detail`` (:func:`fogbayes.effects.terms.describe`), e.g.
 ``step: size 0.238 ± 0.018 deg/h at t = 1810 s (0.503 h) from the start``. Detail keys are
 ``<quantity>_<unit>`` (``_`` for ``/``, ``_per_``), values ``{"value", "stderr"}``.
 """

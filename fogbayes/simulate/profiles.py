@@ -172,12 +172,12 @@ def sensor_rates(temps: np.ndarray, chamber: np.ndarray, lags: Sequence[float],
 def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
                     initial: float | None = None) -> np.ndarray:
     """Response of tau dy/dt = u - y, exact for u linear between samples
-    (:func:`fogbayes.diagnose.lag.first_order_lag`, the loop's own lag filter).
+    (:func:`fogbayes.effects.lag.first_order_lag`, the loop's own lag filter).
 
     ``initial`` is y at t[0] (default u[0]: the sensor starts in equilibrium). tau = 0
     returns u itself.
     """
-    from ..diagnose.lag import first_order_lag as lag
+    from ..effects.lag import first_order_lag as lag
 
     return lag(t, u, positive(tau, "tau", allow_zero=True), initial=initial)
 

@@ -4,7 +4,7 @@ The four whole-record inputs of :func:`fogbayes.loop.calibration.apply_calibrati
 exactly from chunks: spike flags (:func:`fogbayes.diagnose.context.spike_flags`, median and MAD
 by :mod:`.select`), the block grid, dT/dt (:class:`fogbayes.diagnose.covariates.RateCurve` from
 block sums) and filter state carried between chunks
-(:meth:`fogbayes.diagnose.kinds.Kind.chunk_columns`). A writing pass then subtracts the bias
+(:meth:`fogbayes.effects.kinds.Kind.chunk_columns`). A writing pass then subtracts the bias
 (with :mod:`.block_rms` and :mod:`.stability`) or solves for the rate
 (:func:`fogbayes.loop.compensate.solve_rate`).
 """
@@ -19,7 +19,7 @@ from ..composite.cells import operating_time_chunk
 from ..diagnose.context import MAD_TO_SIGMA, spikes_between
 from ..diagnose.covariates import (Covariates, block_index, block_step, grid_of_counts,
                                    rate_curve, rate_window)
-from ..diagnose.terms import chunk_columns
+from ..effects.terms import chunk_columns
 from ..loop.calibration import (RATE_WINDOW_S, TARGET_BLOCKS, RangeCheck, applied_terms)
 from ..loop.calibration_doc import channel_order, validate_loop_document
 from ..loop.compensate import solve_rate
