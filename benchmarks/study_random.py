@@ -216,11 +216,12 @@ def summarise(rows: list[dict]) -> str:
     r13 = sum(r["err_loop"] <= 1.3 * r["err_oracle"] for r in rows)
     p15 = [r for r in rows if r["err_loop"] > 1.5 * r["err_plain"]]
     missed = [r for r in mat if not r["first_right"]]
-    from fogbayes.loop.separable import WHAT
+    from fogbayes.effects import REGISTRY
 
+    what = {n: e.what for n, e in REGISTRY.items() if e.what}
     for r in rows:  # named by effect or by the label the warning gives it
         r["warned"] = bool(r["family"]) and any(
-            r["family"] in w or WHAT.get(r["family"], "?") in w for w in r["warnings"])
+            r["family"] in w or what.get(r["family"], "?") in w for w in r["warnings"])
     lines = [
         f"records: {n} ({len(eff)} with an effect, {len(mat)} material, {len(clean)} clean)",
         f"right effect first on material effects: {sum(r['first_right'] for r in mat)}/"

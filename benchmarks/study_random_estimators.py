@@ -40,7 +40,7 @@ import study_random as sr  # noqa: E402
 
 def _least_squares(ctx, terms) -> np.ndarray:
     """Deterministic model at every sample, coefficients by count-weighted least squares."""
-    from fogbayes.diagnose.terms import design
+    from fogbayes.effects.terms import design
 
     X = ctx.block_design(list(terms))
     w = np.sqrt(ctx.grid.count * ctx.grid.mask)
@@ -93,7 +93,7 @@ def coverage_row(seed: int) -> dict:
     import fogbayes  # noqa: F401
     from fogbayes.diagnose.context import make_context
     from fogbayes.diagnose.fitting import fit_terms
-    from fogbayes.diagnose.terms import design
+    from fogbayes.effects.terms import design
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.constant import ieee_constant
 

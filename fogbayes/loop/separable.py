@@ -28,9 +28,6 @@ POWER_Z = stats.norm.ppf(0.8)
 #: grid points examined per searched candidate (evenly spaced over its grid)
 MAX_GRID = 12
 
-#: each effect's phrase in a separability warning (the registry's ``what``; study scripts
-#: read it): only effects that have one are examined
-WHAT = {n: e.what for n, e in REGISTRY.items() if e.what}
 REMEDY_WALK = ("a static run's noise prior caps the walk (fogbayes allan static.csv --json "
                "static.json, then fogbayes loop --noise-prior static.json)")
 REMEDY_DEFAULT = ("a programme that moves this driver apart from the base's (ramps at two "
