@@ -1,6 +1,6 @@
 """The effect registry (fogbayes.effects): DESIGN.md's names, candidates on chamber and
-rate-table records, plants equal to the closed forms of fogbayes.simulate.effects (written
-separately), and an effect defined only here reaches the loop's candidates and the simulator."""
+rate-table records, and an effect defined only here reaches the loop's candidates and the
+simulator (each plant against its closed form: tests/test_effect_terms.py)."""
 
 from __future__ import annotations
 
@@ -13,15 +13,14 @@ import pytest
 from fogbayes import effects
 from fogbayes.diagnose.candidates import EFFECTS, MAX_TIMES, candidates_for
 from fogbayes.diagnose.context import make_context
-from fogbayes.effects.terms import Term, columns, design
+from fogbayes.effects.terms import Term, columns
 from fogbayes.effects import Candidate, Effect
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
-from fogbayes.simulate import effects as fx
 from fogbayes.simulate import EFFECTS as SIM_EFFECTS
 from fogbayes.simulate import simulate
 from fogbayes.simulate._checks import SimulationParameterError
-from fogbayes.simulate.registry import resolve, term_covariates
+from fogbayes.simulate.registry import resolve
 from fogbayes.simulate.truth import Covariates
 
 DESIGN = Path(__file__).resolve().parent.parent / "docs" / "DESIGN.md"
@@ -79,46 +78,6 @@ def test_an_effect_added_its_maximum_number_of_times_is_no_longer_a_candidate(co
                for i in range(eff.max_times)]
         assert eff.candidates(ctx, base + had[:-1])
         assert eff.candidates(ctx, base + had) == []
-
-
-@pytest.fixture(scope="module")
-def cov():
-    t = np.arange(0.0, 7200.0, 0.5)
-    T1 = 20.0 + 30.0 * np.sin(2 * np.pi * t / 5000.0)
-    T2 = 20.0 + 28.0 * np.sin(2 * np.pi * (t - 300.0) / 5000.0)
-    dTdt = 60.0 * 2 * np.pi / 5000.0 * 30.0 * np.cos(2 * np.pi * t / 5000.0)
-    w = 50.0 * np.sin(2 * np.pi * t / 900.0)
-    return Covariates(t, T1, np.column_stack([T1, T2]), dTdt, w, None, None)
-
-
-CLOSED = {  # the closed forms of fogbayes.simulate.effects at the full parameters
-    "temperature_order": lambda c, p: fx.temperature_order(c.temperature, **p),
-    "temperature_rate": lambda c, p: fx.temperature_rate(c.dTdt, **p),
-    "temperature_gradient": lambda c, p: fx.temperature_gradient(c.temperature,
-                                                                 c.temperatures[:, 1], **p),
-    "thermal_hysteresis": lambda c, p: fx.thermal_hysteresis(c.dTdt, T=c.temperature, **p),
-    "thermal_lag": lambda c, p: fx.thermal_lag(c.time, c.temperature, **p),
-    "time_drift": lambda c, p: fx.time_drift(c.time, **p),
-    "periodic": lambda c, p: fx.periodic(c.time, **p),
-    "step": lambda c, p: fx.step(c.time, **p),
-    "scale_factor_nonlinearity": lambda c, p: fx.scale_factor_nonlinearity(c.input_rate, **p),
-    "scale_factor_asymmetry": lambda c, p: fx.scale_factor_asymmetry(c.input_rate, **p),
-    "scale_factor_temperature": lambda c, p: fx.scale_factor_temperature(c.input_rate,
-                                                                         c.temperature, **p),
-}
-
-
-@pytest.mark.parametrize("name", [n for n, e in effects.REGISTRY.items() if _searched(e)])
-def test_the_plant_of_each_searched_effect_is_its_closed_form_at_the_defaults(cov, name):
-    eff = effects.REGISTRY[name]
-    p = eff.complete(dict(eff.defaults), cov)
-    pairs = eff.plant(p)
-    got = design([t for t, _ in pairs], term_covariates(cov)) @ np.concatenate(
-        [np.asarray(k, float) for _, k in pairs])
-    want = CLOSED[name](cov, p)
-    scale = float(np.max(np.abs(want)))
-    assert np.ptp(want) > 0  # not two constants compared
-    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * scale)
 
 
 class ThermalCross(Effect):
