@@ -50,6 +50,11 @@ def loop(
     compensated: Path = typer.Option(None, "--compensated", show_default=False,
                                      help="Compensated CSV to write (every input row)."),
     max_steps: int = typer.Option(5, "--max-steps", min=0, help="Add at most this many effects."),
+    effect: list[str] = typer.Option(
+        None, "--effect", show_default=False, metavar="NAME",
+        help="Declare an effect (repeatable): its terms join the base model before the "
+             "search, its searched parameter chosen as the loop's; with --max-steps 0, "
+             "the base model plus the declared effects."),
     report: Path = typer.Option(None, "--report", show_default=False,
                                 help="HTML report of the loop to write."),
     orders: str = typer.Option(None, "--orders", "--order",
@@ -94,6 +99,8 @@ def loop(
       fogbayes allan static.csv --json static.json
       fogbayes loop chamber.csv -m bias-t --noise-prior static.json \\
           --json loop.json --compensated comp.csv
+      fogbayes loop chamber.csv -m bias-t --max-steps 0 --effect temperature_rate \\
+          --json fit.json
     """
     from ..data.atomic import all_or_none
     from ..data.io import write_csv_mixed
@@ -107,6 +114,9 @@ def loop(
                             "and --report ask for", column="--report",
                             fix=f"add e.g. --report {rec_path.stem}_loop.html (or --json "
                                 "loop.json, --compensated comp.csv)")
+    from ..loop.declared import check_declared
+
+    declared = check_declared(effect, model, where="--effect")
     if not 0.0 < alpha < 0.5:
         raise FogbayesError(f"alpha={alpha} is outside (0, 0.5)", column="--alpha",
                             fix="use e.g. --alpha 0.01")
@@ -129,7 +139,7 @@ def loop(
                                 "(effects need several cycles of their driver: hours of data)")
     with loop_progress(f"loop {rec_path.name}", max_steps), about_file(rec_path):
         res = run_loop(rec, model, orders=orders, max_steps=max_steps, alpha=alpha, seed=seed,
-                       noise_prior=prior)
+                       noise_prior=prior, declared=declared)
     with all_or_none():  # a report that fails leaves no JSON or CSV behind
         if report is not None:
             from ..render.loop import loop_report
@@ -146,7 +156,9 @@ def loop(
         say(f"noise prior: random walk K <= {prior.k_max:.4g} deg/h^1.5 ({prior.source})")
     from ..render.effects import effect_phrase
 
-    added = "; ".join(effect_phrase(s.effect, s.detail, s.covariates) for s in res.steps) or "nothing"
+    added = "; ".join(effect_phrase(s.effect, s.detail, s.covariates)
+                      + (" (declared)" if s.evidence.get("declared") else "")
+                      for s in res.steps) or "nothing"
     reason = res.stop.reason
     if res.effects and reason.startswith("no candidate"):  # after additions: none *further*
         reason = "no further" + reason[len("no"):]

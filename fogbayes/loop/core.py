@@ -34,6 +34,7 @@ from .adev_misfit import adev_misfit
 from .bases import ALLOWED, allowed as allowed_for, base_terms
 from .calibration import calibration_json, input_json
 from .constant import ieee_constant
+from .declared import check_declared, declare, evidence_json as declared_evidence
 from .separable import detectability, separability_warnings
 from .identifiable import collinearity_warnings
 from .compensate import compensate
@@ -261,7 +262,7 @@ def _decide(ctx: Context, fit: ModelFit, opts: Options, step: int, cache: dict):
 def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps: int = 5,
              alpha: float = ev.ALPHA, seed: int = 0, n_sims: int = 300, n_refit: int = 3,
              effects: tuple[str, ...] | None = None, target_blocks: int = 2500,
-             noise_prior: NoisePrior | None = None) -> LoopResult:
+             noise_prior: NoisePrior | None = None, declared=()) -> LoopResult:
     """Run the closed loop on a :class:`~fogbayes.data.Recording` from base ``model``.
 
     Args:
@@ -275,14 +276,18 @@ def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps
             block-grid size.
         noise_prior: a cap on the random walk from a static run
             (:mod:`fogbayes.diagnose.noise_prior`), applied to every fit of the loop.
+        declared: effect names added to the base model, in order, before the search: each a
+            step with evidence ``declared`` and no test (:mod:`.declared`); ``max_steps=0``
+            with them is the base model plus the declared effects.
     """
+    declared = check_declared(declared, model, where="declared")
     with single_thread_blas(), host_device():  # sequential scans: the CPU beats a GPU
         return _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
-                    target_blocks, noise_prior)
+                    target_blocks, noise_prior, declared)
 
 
 def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
-         target_blocks, noise_prior) -> LoopResult:
+         target_blocks, noise_prior, declared=()) -> LoopResult:
     allowed = tuple(e for e in allowed_for(model) if effects is None or e in effects) \
         if model in ALLOWED else effects
     opts = Options(max_steps, alpha, n_sims, n_refit, seed, allowed, target_blocks)
@@ -305,6 +310,20 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     stop = Rejected("max_steps reached", {})
     h_cur = holdout.score(ctx, fit)
     h_base, held_out = h_cur, []
+    for i, name in enumerate(declared):
+        tell(0, max_steps, f"adding the declared {name}", name)
+        d = declare(ctx, fit, name, n_sims=n_sims, seed=seed + 7919 * (max_steps + i + 1),
+                    cache=cache)
+        new, rows = d.fit, []
+        if markov:
+            new, rows = choose_noise(ctx, new, alpha=alpha, after=f"+ {name}")
+        noise_rows += rows
+        m1 = _metrics(ctx, new, seed, cache)
+        term = new.terms[-1]
+        steps.append(Step(name, d.screened.candidate.covariates, term, _detail(new, term, rec),
+                          declared_evidence(d), cur.rms, m1.rms, m1, new))
+        fit, cur = new, m1
+        h_cur = holdout.score(ctx, fit)
     for k in range(max_steps):
         tr, evid, why = _decide(ctx, fit, opts, k, cache)
         if tr is None:

@@ -75,6 +75,14 @@ def loop_headline(res, rec=None):
     return headline_section(rec, model=model, rows=rows, verdict=sentence, ok=ok, what=what)
 
 
+def _described(effect: str) -> str:
+    """`` — <the effect's description>`` from the registry ("" if it has none)."""
+    from ..effects import REGISTRY
+
+    desc = getattr(REGISTRY.get(effect), "description", "")
+    return f" — {desc}" if desc else ""
+
+
 def loop_section(res):
     """A :class:`~fogbayes.render.html.Section` telling the loop's story."""
     from ..loop.noise_model import sentence as noise_model_sentence
@@ -98,7 +106,15 @@ def loop_section(res):
                                               "model (10 s means).")
     for i, s in enumerate(res.steps):
         e = s.evidence
-        sec.text(f"Step {i + 1}: added {effect_phrase(s.effect, s.detail, s.covariates)}. "
+        what = _described(s.effect)
+        if e.get("declared"):  # the user's: no test, no ranking of candidates
+            sec.text(f"Step {i + 1}: declared {effect_phrase(s.effect, s.detail, s.covariates)}"
+                     f"{what}. Added without a test; likelihood ratio 2 dlogL = "
+                     f"{fmt(e['likelihood_ratio'])}. RMS {fmt(s.rms_before)} → "
+                     f"{fmt(s.rms_after)} deg/h.")
+            sec.figure(step_figure(res, i), caption=f"the residual {s.effect} was fitted to")
+            continue
+        sec.text(f"Step {i + 1}: added {effect_phrase(s.effect, s.detail, s.covariates)}{what}. "
                  f"Likelihood ratio 2 dlogL = {fmt(e['likelihood_ratio'])}, calibrated log10 p = "
                  f"{fmt(e['log10_p'], sig=3)} (family-wise {fmt(e['log10_p_familywise'], sig=3)}); "
                  f"ELPD gain {fmt(e['elpd_diff'])} ± {fmt(e['elpd_diff_se'], sig=3)} nats. "
