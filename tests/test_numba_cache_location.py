@@ -32,3 +32,32 @@ def test_compiled_loops_cache_in_the_user_cache_folder(tmp_path):
     assert cached, "no cache index written under FOGBAYES_CACHE_DIR"
     assert any("allan_loops" in p.name for p in cached)
     assert _in_tree() == before  # nothing new beside the sources
+
+
+_GENERATED = """
+import numpy as np
+from fogbayes.models.polynomial import PolyBasis
+from fogbayes.thermal import compensate_loops as cl
+rng = np.random.default_rng(0)
+z = rng.normal(size=(1000, 2)); y = rng.normal(size=1000); coef = rng.normal(size=4)
+basis = PolyBasis(("T", "dT/dt"), ((0, 0), (1, 0), (0, 1), (2, 1)), (0.1, -0.2), (2.0, 3.0))
+out = cl.compensate_into(basis, coef, z, y, method="loop")
+assert np.allclose(out, cl.compensate_numpy(basis, coef, z, y), rtol=0, atol=1e-12)
+stats = cl._compiled(basis.terms).stats
+print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
+"""
+
+
+def test_a_loop_compiled_from_generated_source_is_loaded_by_the_next_process(tmp_path):
+    """Generated loops (thermal and composite compensation) are compiled once per machine:
+    the source goes to a file in the cache folder, so Numba's disk cache serves the next
+    process (a cache hit, no miss) instead of compiling again."""
+    before = _in_tree()
+    env = {**os.environ, "FOGBAYES_CACHE_DIR": str(tmp_path)}
+    runs = [subprocess.run([sys.executable, "-c", _GENERATED], check=True, env=env,
+                           cwd=tmp_path, capture_output=True, text=True).stdout.split()
+            for _ in range(2)]
+    assert runs[0] == ["0", "1"]  # the first process compiles (one miss) ...
+    assert runs[1] == ["1", "0"]  # ... the second loads it (one hit)
+    assert list((tmp_path / "numba" / "numba_src").glob("loop_*.py"))
+    assert _in_tree() == before

@@ -12,7 +12,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..support.numba_cache import numba
+from ..support.numba_cache import njit_source, numba
 from .model import RESID_ABS, RESID_REL
 
 
@@ -100,9 +100,8 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> tuple[str, np.
 @lru_cache(maxsize=64)
 def _compiled(text: str):
     """The compiled program of one generated source (one per structure; module doc)."""
-    space = {"np": np, "prange": numba.prange}
-    exec(text, space)  # noqa: S102 -- our own generated arithmetic, no input text
-    return numba.njit(nogil=True, parallel=True, error_model="numpy")(space["loop"])
+    return njit_source(text, "loop", {"np": np, "prange": numba.prange}, nogil=True,
+                       parallel=True, error_model="numpy")
 
 
 def compile_loop(p, sc, box, *, method: str, iterations: int, recip):

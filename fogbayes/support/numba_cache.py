@@ -2,12 +2,16 @@
 
 Registers a cache locator for fogbayes sources: :func:`fogbayes_cache_dir` ``/numba``, else a
 per-user temporary folder, never ``__pycache__`` in the package. Fogbayes modules import
-``numba`` from here and spread rows over the cores with :func:`over_rows`.
+``numba`` from here, compile generated source with :func:`njit_source` (cached on disk like a
+module's functions) and spread rows over the cores with :func:`over_rows`.
 """
 
 from __future__ import annotations
 
+import hashlib
+import importlib.util
 import os
+import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -18,7 +22,7 @@ from numba.core import caching
 
 from .._config import fogbayes_cache_dir
 
-__all__ = ["fogbayes_cache_dir", "numba", "over_rows"]
+__all__ = ["fogbayes_cache_dir", "njit_source", "numba", "over_rows"]
 
 _PACKAGE = Path(__file__).resolve().parent.parent  # fogbayes/, this file is in support/
 
@@ -67,6 +71,55 @@ class FogbayesCacheLocator(_Base):
 _Impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl
 if FogbayesCacheLocator not in _Impl._locator_classes:
     _Impl._locator_classes.insert(0, FogbayesCacheLocator)
+
+
+def _source_file(text: str) -> Path | None:
+    """``text`` as a file named by its hash under a writable cache folder (written once, so
+    its time stamp, which Numba's cache index checks, never changes), or None."""
+    name = f"loop_{hashlib.sha256(text.encode()).hexdigest()[:24]}.py"
+    for root in FogbayesCacheLocator._roots:
+        folder = root() / "numba_src"
+        path = folder / name
+        try:
+            if not path.exists():
+                folder.mkdir(parents=True, exist_ok=True)
+                tmp = folder / f".{name}.{os.getpid()}.tmp"
+                tmp.write_text(text)
+                if not path.exists():  # another process may have written it meanwhile
+                    os.replace(tmp, path)
+                else:
+                    tmp.unlink()
+            return path
+        except OSError:
+            continue
+    return None
+
+
+def njit_source(text: str, name: str = "loop", space: dict | None = None, **options):
+    """``numba.njit(**options)`` of function ``name`` defined by the generated source ``text``.
+
+    Numba caches only functions defined in files, so the source is written once to the cache
+    folder (named by its hash) and imported from there with ``cache=True``: a later process
+    loads the machine code instead of compiling it again (seconds per loop). ``space``: the
+    names the source uses (e.g. ``np``, ``prange``). Without a writable folder the source is
+    compiled in memory, as before.
+    """
+    path = _source_file(text)
+    if path is not None:
+        try:
+            spec = importlib.util.spec_from_file_location(path.stem, path)
+            module = sys.modules.get(path.stem)
+            if module is None:  # Numba's cached code looks its module up by name
+                module = importlib.util.module_from_spec(spec)
+                module.__dict__.update(space or {})
+                spec.loader.exec_module(module)
+                sys.modules[path.stem] = module
+            return numba.njit(cache=True, **options)(getattr(module, name))
+        except OSError:
+            pass
+    namespace = dict(space or {})
+    exec(text, namespace)  # noqa: S102 -- our own generated arithmetic, no input text
+    return numba.njit(**options)(namespace[name])
 
 
 def over_rows(kernel, n_rows: int, *args, min_rows: int = 2) -> None:

@@ -11,7 +11,7 @@ import threading
 from collections.abc import Callable
 from functools import lru_cache
 
-from ..support.numba_cache import numba
+from ..support.numba_cache import njit_source, numba
 import numpy as np
 
 
@@ -43,9 +43,8 @@ _COMPILED_TERMS: set = set()
 @lru_cache(maxsize=64)
 def _compiled(terms: tuple[tuple[int, ...], ...]) -> Callable:
     _COMPILED_TERMS.add(terms)
-    space: dict = {"prange": numba.prange}
-    exec(_source(terms), space)  # noqa: S102 -- our own generated arithmetic, no input text
-    return numba.njit(nogil=True, parallel=True)(space["loop"])
+    return njit_source(_source(terms), "loop", {"prange": numba.prange}, nogil=True,
+                       parallel=True)
 
 
 #: ``method="auto"``: a term set whose loop is not compiled yet in this process is evaluated
