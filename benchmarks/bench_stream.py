@@ -56,7 +56,7 @@ def header() -> dict:
 
 # ------------------------------------------------------------------------------- large
 def bias_t_fit() -> dict:
-    from fogbayes.export.coefficients import coefficient_document
+    from fogbayes.models.basis_document import coefficient_document
     from fogbayes.thermal.model import bias_t_spec, thermal_basis
     from fogbayes.thermal.data import make_processing
 

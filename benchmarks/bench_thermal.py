@@ -62,7 +62,7 @@ def speed(scale: float, repeat: int, sensors: int) -> dict:
     out["compensate_recording_s"] = round(best_of(lambda: compensate_recording(rec, doc), repeat), 3)
 
     # the compensator alone: y - X(z) @ coef with z = (T, dT/dt)
-    from fogbayes.export.coefficients import basis_from_dict
+    from fogbayes.models.basis_document import basis_from_dict
     from fogbayes.models.polynomial import evaluate  # noqa: F401
 
     basis = basis_from_dict(doc["params"]["basis"])

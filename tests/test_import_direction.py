@@ -232,3 +232,45 @@ def test_a_shared_layer_imports_no_model_family(shared):
     bad = sorted(f"{m} -> {d}" for m, deps in every.items() if m.startswith(f"fogbayes.{shared}.")
                  for d in deps if d.split(".")[1:2] and d.split(".")[1] in families)
     assert bad == [], bad
+
+
+FAMILIES = ("thermal", "composite", "allan", "arma")
+
+
+def _package_imports(path: Path) -> set[str]:
+    """Top-level fogbayes packages ``path`` imports (relative or absolute, lazy included;
+    ``from .. import x`` counts as package x)."""
+    parts = list(path.relative_to(PKG.parent).with_suffix("").parts)
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        names = []
+        if isinstance(node, ast.ImportFrom):
+            mod = node.module.split(".") if node.module else []
+            base = parts[:len(parts) - node.level] if node.level else []
+            full = base + mod
+            names = [full + [a.name] for a in node.names] if len(full) == 1 else [full]
+        elif isinstance(node, ast.Import):
+            names = [a.name.split(".") for a in node.names]
+        out |= {n[1] for n in names if len(n) > 1 and n[0] == "fogbayes"}
+    return out
+
+
+#: The layers under the families (docs/DESIGN.md) and the root's modules.
+BELOW = {"data", "errors", "_config", "support", "preprocess", "stats", "models", "inference",
+         "__version__"}
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_a_family_imports_only_the_layers_below_it(family):
+    """The families stand side by side on one floor: what two of them share (the ARMA maths,
+    the fit document's basis, the operating time) lives below them (models/, preprocess/), so
+    no family imports another, nor export or anything else above."""
+    for f in sorted((PKG / family).rglob("*.py")):
+        bad = sorted(_package_imports(f) - BELOW - {family})
+        assert bad == [], f"{f.relative_to(PKG)} imports {bad}"
+
+
+def test_the_loop_diagnosis_imports_no_family():
+    for f in sorted((PKG / "diagnose").rglob("*.py")):
+        bad = sorted(_package_imports(f) & set(FAMILIES))
+        assert bad == [], f"{f.relative_to(PKG)} imports the family {bad}"

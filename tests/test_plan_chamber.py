@@ -128,3 +128,33 @@ def test_the_loop_points_an_undecided_thermal_duel_to_the_planner():
     assert len(lines) == 2
     assert "thermal_lag" in lines[0] and "plan-chamber" in lines[0]
     assert "time_drift" in lines[1] and "plan-chamber" not in lines[1]
+
+
+def test_the_pairs_are_read_from_the_registry():
+    """A lag and a Shupe term each against the other effects a programme separates (docs/plan.md:
+    a lag against the gradient and the Shupe term, the Shupe term against both); an effect
+    registered as separable becomes everyone's rival, and leaves with its registration."""
+    from fogbayes import effects
+    from fogbayes.effects.temperature_gradient import TemperatureGradient
+    from fogbayes.plan.programme import Pair, pairs_for
+
+    truths = {"thermal_lag": (0.01, [1200.0, 1800.0]), "temperature_rate": (0.3, [None])}
+    assert pairs_for(truths) == [
+        Pair("thermal_lag", "temperature_gradient", 0.01, 1200.0),
+        Pair("thermal_lag", "temperature_gradient", 0.01, 1800.0),
+        Pair("thermal_lag", "temperature_rate", 0.01, 1200.0),
+        Pair("thermal_lag", "temperature_rate", 0.01, 1800.0),
+        Pair("temperature_rate", "thermal_lag", 0.3, None),
+        Pair("temperature_rate", "temperature_gradient", 0.3, None)]
+
+    class Crosstalk(TemperatureGradient):
+        name = "test_crosstalk"
+
+    effects.register(Crosstalk)
+    try:
+        rivals = {p.rival for p in pairs_for(truths)}
+        assert rivals == {"temperature_gradient", "temperature_rate", "thermal_lag",
+                          "test_crosstalk"}
+    finally:
+        effects.unregister("test_crosstalk")
+    assert "test_crosstalk" not in {p.rival for p in pairs_for(truths)}

@@ -364,7 +364,7 @@ def test_fused_compensator_equals_the_design_matrix_formula(thermal_run):
     # monomials, |.| <= 1 in range) cancel to a small bias, so the yardstick is their sum:
     # bound 2 p eps (|y| + sum |coef|) ~ 2e-14 deg/h; measured 2.7e-15
     from fogbayes.thermal.compensate import compensate_bias
-    from fogbayes.export.coefficients import basis_from_dict
+    from fogbayes.models.basis_document import basis_from_dict
     from fogbayes.models.polynomial import design
     from fogbayes.thermal.workflow import fit_recording
 
@@ -450,7 +450,7 @@ print(json.dumps(out))
 
 
 def _rss_record(d, n):
-    from fogbayes.export.coefficients import coefficient_document
+    from fogbayes.models.basis_document import coefficient_document
     from fogbayes.thermal.model import bias_t_spec, thermal_basis
     from fogbayes.thermal.data import make_processing
 

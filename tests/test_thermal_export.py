@@ -10,12 +10,10 @@ from fogbayes.thermal.compensate import bias_compensator, compensate_bias, compe
 from fogbayes.export.coefficients import (
     DEG_H_TO_RAD_S,
     ExportError,
-    basis_from_dict,
-    basis_to_dict,
-    coefficient_document,
     px4_gyro_parameters,
     px4_param_file,
 )
+from fogbayes.models.basis_document import basis_from_dict, basis_to_dict, coefficient_document
 from fogbayes.models.polynomial import evaluate, make_basis
 from fogbayes.thermal.model import ThermalSpec, bias_t_spec, thermal_basis
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.documents import FIT_SCHEMA
-from ..export.coefficients import coefficient_document
+from ..models.basis_document import coefficient_document
 from ..inference.lsq import conditionings_from_covariances, identifiability
 from ..models.polynomial import rebase_matrices
 

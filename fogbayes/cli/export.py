@@ -43,7 +43,8 @@ def _axes(paths: list[Path]) -> tuple[list, tuple[float, float] | None, list[str
     temperature span the fits saw (None when no document states one); the documents'
     warnings about the logged rates (fogbayes/data/logs/firmware.py)."""
     from ..errors import FogbayesError
-    from ..export.coefficients import ExportError, basis_from_dict, basis_from_loop
+    from ..export.coefficients import ExportError, basis_from_loop
+    from ..models.basis_document import basis_from_dict
 
     from ..data.logs.firmware import PREFIX as FIRMWARE_PREFIX
 

@@ -128,7 +128,9 @@ def plan_chamber(
       fogbayes plan-chamber chamber_run.csv --max-rate 3 --lag-tau 1200,1800 --json plan.json
     """
     from ..errors import ArgumentError
-    from ..plan.programme import Pair, noise_for_plan, plan_programme
+    from ..effects.temperature_rate import TemperatureRate
+    from ..effects.thermal_lag import ThermalLag
+    from ..plan.programme import noise_for_plan, pairs_for, plan_programme
 
     refuse_overwrite({"the pilot recording": pilot}, {"--json": json_out})
     if (pilot is None) == (noise is None):
@@ -162,10 +164,8 @@ def plan_chamber(
             nz, dur, rate = noise_for_plan(allan=dict(zip("NBK", n_b_k)), duration=hours * 3600,
                                            fs=fs, lags=lag_s, room=room)
             source = f"Allan terms N {n_b_k[0]:g}, B {n_b_k[1]:g}, K {n_b_k[2]:g}"
-        pairs = [Pair("thermal_lag", "temperature_gradient", lag_coeff, t) for t in taus] + \
-            [Pair("thermal_lag", "temperature_rate", lag_coeff, t) for t in taus] + \
-            [Pair("temperature_rate", "thermal_lag", rate_coeff),
-             Pair("temperature_rate", "temperature_gradient", rate_coeff)]
+        pairs = pairs_for({ThermalLag.name: (lag_coeff, taus),
+                           TemperatureRate.name: (rate_coeff, [None])})
         try:
             plan = plan_programme(nz, pairs, duration=dur, fs=rate, lags=lag_s, low=low,
                                   high=high, room=room, max_rate=max_rate, baseline=baseline)

@@ -2,7 +2,7 @@
 
 theta ~ N(0, prior_scale^2 I), y' = X theta + e, e ~ N(0, s^2 V(eta)), sigma ~ HalfNormal(1).
 ``noise``: ``"white"``; ``"ar<p>"`` (exact per-cell AR(p), phi by
-:func:`fogbayes.arma.model.pacf_to_ar`, PACF ~ U(-1, 1)); ``"cells"`` (:mod:`.noise`,
+:func:`fogbayes.models.arma.pacf_to_ar`, PACF ~ U(-1, 1)); ``"cells"`` (:mod:`.noise`,
 log lam ~ N(-4, 3^2), rho ~ U(0, 0.99)). theta is integrated out: with H = G / s^2 + I / prior_scale^2,
 m = H^-1 h / s^2, log p(y | s, eta) = -1/2 [n log(2 pi s^2) + log|V| + q/s^2 - m'h/s^2 + log|H| +
 p log prior_scale^2]; NUTS samples (s, eta) and theta ~ N(m, H^-1) is drawn exactly.
@@ -53,7 +53,7 @@ def _ar_whiten(phi, X, y, first, n):
     Rows t >= p: x_t - sum phi_i x_{t-i}; the first p rows of every cell (``first``,
     (K, p)) are replaced by L_p^-1 x, Gamma_p = L_p L_p^T (their stationary covariance).
     """
-    from ..arma.model import arma_acov
+    from ..models.arma import arma_acov
 
     p = phi.shape[0]
     g = arma_acov(phi, jnp.zeros(0), 1.0, p)
@@ -129,7 +129,7 @@ def _suff(noise, eta, data):
     X, y = data["X"], data["y"]
     if noise == "white":
         return X.T @ X, X.T @ y, y @ y, 0.0
-    from ..arma.model import pacf_to_ar
+    from ..models.arma import pacf_to_ar
 
     Xw, yw, logdet = _ar_whiten(pacf_to_ar(eta["pacf"]), X, y, data["first"], y.shape[0])
     return Xw.T @ Xw, Xw.T @ yw, yw @ yw, logdet
@@ -191,7 +191,7 @@ def _start(data: RateData, orders: Orders, sc: Scaling, noise: str, p_ar: int) -
         init["log_lam"] = float(np.clip(np.log(max(ls.lam, 1e-12)), -12.0, 6.0))
         init["rho"] = float(np.clip(ls.rho, 0.05, 0.95))
     elif p_ar:
-        from ..arma.model import ar_to_pacf
+        from ..models.arma import ar_to_pacf
 
         init["pacf"] = np.clip(np.asarray(ar_to_pacf(jnp.asarray(ls.ar))), -0.95, 0.95)
     return start, init
@@ -216,7 +216,7 @@ def _pointwise(noise, eta, theta, data, K):
     X, y = data["X"], data["y"]
     logdet_cell = 0.0
     if noise != "white":
-        from ..arma.model import pacf_to_ar
+        from ..models.arma import pacf_to_ar
 
         X, y, logdet = _ar_whiten(pacf_to_ar(eta["pacf"]), X, y, data["first"], y.shape[0])
         logdet_cell = logdet / K

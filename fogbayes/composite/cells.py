@@ -1,9 +1,9 @@
 """Rate-table recordings as (T_i, W_j) cells for the composite model (paper 000).
 
 :func:`rate_data` finds the cells (:func:`fogbayes.preprocess.segment_rate_table` or a user
-schedule) and gives each sample its operating time t: ``"cell"`` (since the last rate step,
-default), ``"temperature"`` (since the plateau start) or ``"run"``. :func:`summarise_cells`
-reduces each cell to its line in t, A_ij = mean - slope * t-mean, B_ij = slope (eq. 10).
+schedule) and gives each sample its operating time t (:mod:`fogbayes.preprocess.operating_time`:
+``"cell"``, ``"temperature"`` or ``"run"``). :func:`summarise_cells` reduces each cell to its
+line in t, A_ij = mean - slope * t-mean, B_ij = slope (eq. 10).
 """
 
 from __future__ import annotations
@@ -13,9 +13,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..data.recording import Recording
-from ..errors import FogbayesError, MissingColumnError, TooShortError
-
-CONVENTIONS = ("cell", "temperature", "run")
+from ..errors import MissingColumnError, TooShortError
+from ..preprocess.operating_time import check_convention, operating_time
 
 
 class RateData(NamedTuple):
@@ -52,58 +51,6 @@ class CellSummary(NamedTuple):
         return self.mean - self.slope * self.t_mean
 
 
-class ConventionError(FogbayesError):
-    """An unknown operating-time convention."""
-
-
-def _check_convention(convention: str) -> str:
-    if convention not in CONVENTIONS:
-        raise ConventionError(f"unknown operating-time convention {convention!r}",
-                              column="operating_time", fix=f"use one of {', '.join(CONVENTIONS)}")
-    return convention
-
-
-def operating_time(time, input_rate=None, cells=None, *, convention: str = "cell",
-                   rate_tolerance: float = 0.01) -> np.ndarray:
-    """Operating time t (s) of every sample under ``convention`` (see the module doc).
-
-    ``"cell"`` restarts at every input-rate step (|dW| > ``rate_tolerance`` between
-    samples); ``"temperature"`` at the first cell of each run of cells at one temperature
-    level (``cells`` from :func:`segment_rate_table`); both fall back to ``"run"`` when
-    their information is missing.
-    """
-    time = np.asarray(time, dtype=float)
-    _check_convention(convention)
-    origin_idx = np.zeros(time.size, int)
-    if convention == "cell" and input_rate is not None:
-        step = np.flatnonzero(np.abs(np.diff(np.asarray(input_rate, float))) > rate_tolerance) + 1
-        marks = np.zeros(time.size, int)
-        marks[step] = step
-        origin_idx = np.maximum.accumulate(marks)
-    elif convention == "temperature" and cells:
-        marks = np.zeros(time.size, int)
-        prev = None
-        for c in cells:
-            if c.i != prev:
-                marks[c.start] = c.start
-            prev = c.i
-        origin_idx = np.maximum.accumulate(marks)
-    return time - time[origin_idx]
-
-
-def operating_time_chunk(time, input_rate, carry, *, rate_tolerance: float = 0.01):
-    """:func:`operating_time` (convention ``"cell"``) of one chunk of a record read in
-    order, and the carry for the next chunk: ``carry`` is (time of the current origin, last
-    input rate) of the chunks before, None on the first chunk (whose first row is an
-    origin). Equal, chunk by chunk, to the whole record's values."""
-    t, w = np.asarray(time, dtype=float), np.asarray(input_rate, dtype=float)
-    origin_t, prev_w = (None, None) if carry is None else carry
-    step = np.abs(np.diff(w, prepend=w[0] if prev_w is None else prev_w)) > rate_tolerance
-    if prev_w is None:
-        step[0] = True
-    idx = np.maximum.accumulate(np.where(step, np.arange(t.size), -1))
-    origin = np.where(idx >= 0, t[np.maximum(idx, 0)], origin_t if origin_t is not None else t[0])
-    return t - origin, (float(origin[-1]), float(w[-1]))
 
 
 def rate_data(rec: Recording, *, convention: str = "cell", schedule=None, table=None,
@@ -127,7 +74,7 @@ def rate_data(rec: Recording, *, convention: str = "cell", schedule=None, table=
     if not rec.has_temperature:
         raise MissingColumnError("the composite model needs a temperature channel", file=src,
                                  column="temperature", fix="add a 'temperature' column in deg C")
-    _check_convention(convention)
+    check_convention(convention)
     if table is None:
         table = segment_rate_table(rec.time, rec.input_rate, rec.temperature,
                                    schedule=schedule, **segment_options)

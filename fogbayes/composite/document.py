@@ -11,7 +11,7 @@ import numpy as np
 
 from ..data.doc_models import _input, _optional_objects
 from ..data.doc_rules import COMPOSITE_LIMIT, COVARIATE_LIMIT, _Checker
-from .cells import CONVENTIONS
+from ..preprocess.operating_time import CONVENTIONS
 from .compensate import METHODS, MethodError, reciprocal_poly
 from .model import Orders, Scaling, unpack
 

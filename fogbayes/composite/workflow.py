@@ -13,7 +13,8 @@ import numpy as np
 
 from ..data.documents import FIT_SCHEMA, validate_in_memory
 from ..errors import FogbayesError, MissingColumnError, UnitError
-from .cells import operating_time, rate_data
+from ..preprocess.operating_time import operating_time
+from .cells import rate_data
 from .classify import classify_fit
 from .compensate import Compensator, build_compensator, compensate_draws
 from .compare import select_orders

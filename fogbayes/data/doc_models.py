@@ -102,7 +102,7 @@ def _optional_objects(doc: dict, v: _Checker, keys) -> None:
 
 
 def _basis(b: dict, v: _Checker, key: str):
-    """Structure of a polynomial basis (:func:`fogbayes.export.coefficients.basis_to_dict`)."""
+    """Structure of a polynomial basis (:func:`fogbayes.models.basis_document.basis_to_dict`)."""
     cov_names = v.strings(b, "covariates", f"{key}.covariates")
     exps = v.get(b, "exponents", list, path=f"{key}.exponents")
     for k, e in enumerate(exps):
@@ -128,7 +128,7 @@ def _basis(b: dict, v: _Checker, key: str):
 def check_basis(d: Any, *, source: str | None = None, key: str = "params.basis") -> None:
     """A :class:`FitDocumentError` unless ``d`` is a well-formed basis (finite centres,
     positive scales, exponents 0 ... 8, one per covariate): for readers of a basis alone,
-    e.g. :func:`fogbayes.export.coefficients.basis_from_dict` behind the PX4 export."""
+    e.g. :func:`fogbayes.models.basis_document.basis_from_dict` behind the PX4 export."""
     v = _Checker(source)
     if not isinstance(d, dict):
         v.fail(key, f"is a {_kind(d)}, not an object")

@@ -16,6 +16,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ..errors import TooShortError
+from ..preprocess.operating_time import operating_time
 from ..preprocess.temperature_rate import savgol_slope_grid
 from .corners import corner_reach, find_corners, replace_near_corners
 
@@ -26,7 +27,7 @@ class Covariates(NamedTuple):
     t: s from the first sample; T: (n, k) deg C; names: channel names; Tdot: (n,) deg C/min
     of the first channel (None without temperature); omega: (n,) deg/s or None;
     duration: record span (s); op_time: operating time of a rate-table run (s since the
-    last input-rate step, :func:`fogbayes.composite.cells.operating_time`) or None.
+    last input-rate step, :func:`fogbayes.preprocess.operating_time.operating_time`) or None.
     """
 
     t: np.ndarray
@@ -211,8 +212,6 @@ def covariates_of(rec, grid: BlockGrid, *, rate_window_s: float = 60.0) -> Covar
     omega = None if rec.input_rate is None else np.asarray(rec.input_rate, float)
     op = None
     if omega is not None:
-        from ..composite.cells import operating_time
-
         op = operating_time(t, omega, convention="cell")
     return Covariates(t, T, tuple(rec.temperature_names), Tdot, omega, float(t[-1]), op)
 

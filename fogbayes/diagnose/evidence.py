@@ -224,7 +224,7 @@ def screen_periodic(ctx: Context, wm: Whitened, cand: Candidate) -> Screened | N
     lp = -0.5 * float(P[b])
     m = _m_eff(-0.5 * Ps.max(axis=0), int(sel.sum()))
     freq = float(f[sel][b])
-    term = Term("periodic", {"effect": "periodic", "frequency": freq})
+    term = Term("periodic", {"effect": cand.effect, "frequency": freq})
     return Screened(cand, term, freq, float(P[b]), 2, lp, m, calibrated_log_p(lp, m))
 
 

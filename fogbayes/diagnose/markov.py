@@ -17,6 +17,7 @@ from ..inference import noise_fit as nfit
 from . import nullsim
 from .context import Context
 from .fitting import ModelFit
+from ..effects.simulator_only import MarkovNoise
 from ..effects.terms import Term, design
 
 N_TAU, N_VAR = 8, 13
@@ -63,7 +64,7 @@ def markov_start(ctx: Context, fit: ModelFit) -> Term | None:
                                            jnp.asarray(ctx.grid.mask),
                                            jnp.asarray(ctx.grid.w), jnp.asarray(pad)))
     it, iv = np.unravel_index(int(np.argmax(ll[:, 0])), (N_TAU, N_VAR))
-    return Term("markov", {"effect": "markov_noise", "tau": float(taus[it]),
+    return Term("markov", {"effect": MarkovNoise.name, "tau": float(taus[it]),
                            "logvar": float(math.log(vs[iv]))})
 
 

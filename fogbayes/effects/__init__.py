@@ -23,7 +23,7 @@ REGISTRY: dict[str, Effect] = {e.name: e() for e in (
     TemperatureOrder, TemperatureRate, TemperatureGradient, ThermalHysteresis, ThermalLag,
     TimeDrift, Periodic, Step, ScaleFactorNonlinearity, ScaleFactorAsymmetry,
     ScaleFactorTemperature, MarkovNoise)}
-LAWS: dict[str, Effect] = {"paper004": Paper004()}
+LAWS: dict[str, Effect] = {Paper004.name: Paper004()}
 
 
 def register(effect):

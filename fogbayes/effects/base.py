@@ -41,7 +41,8 @@ class Effect:
     loop may add it; separable_by_programme: a chamber programme can tell it from the others
     so marked; stochastic: drawn by the scenario's noise, not planted; what: the phrase a
     separability warning names it by ("" = not examined for separability); remedy: the
-    programme change that separates it ("" = the general one).
+    programme change that separates it ("" = the general one); processing: how the loop
+    computes the covariates it uses, as the calibration document's ``processing`` states it.
     """
 
     name: str = ""
@@ -56,6 +57,7 @@ class Effect:
     stochastic: bool = False
     what: str = ""
     remedy: str = ""
+    processing: dict[str, str] = {}
 
     def plant(self, p: dict) -> Planted:
         raise NotImplementedError
@@ -70,6 +72,13 @@ class Effect:
 
     def candidates(self, ctx, terms) -> list[Candidate]:
         return []
+
+    def programme_terms(self, ctx, n: int, true: dict | None = None) -> list[Term]:
+        """The terms that stand for it when a chamber programme is scored
+        (:mod:`fogbayes.plan.programme`): its planted terms at ``true`` parameters (default:
+        its defaults); an effect with a searched scale gives ``n`` members over the loop's
+        range unless ``true`` sets the scale."""
+        return [tm for tm, _ in self.plant({**self.defaults, **(true or {})})]
 
     def oracle(self, ctx, p: dict) -> list[Term]:
         """The planted effect at its true parameters ``p`` as the loop's terms (the true model

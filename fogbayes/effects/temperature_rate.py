@@ -13,6 +13,9 @@ class TemperatureRate(Effect):
     defaults = {"coeff": 0.3}
     size_keys = ("coeff",)
     separable_by_programme = True
+    processing = {"temperature_rate": "Savitzky-Golay (order 2) slope of block-mean "
+                                      "temperature over rate_window_s, chamber corners kept; "
+                                      "deg C/min of the first channel"}
 
     def plant(self, p):
         return [(Term("rate", {"scale": 1.0}), [p["coeff"]])]

@@ -1,7 +1,8 @@
 """Coefficient export: a JSON document per model, and PX4 / ArduPilot thermal-compensation parameters.
 
-JSON: scaled-basis coefficients, covariance, raw coefficients with standard errors
-(:func:`basis_from_dict`). PX4 (``TC_G<i>_*``, rad/s): offset = sum_k X<k> dT^k, dT = clamp(T) - TREF
+JSON (:mod:`fogbayes.models.basis_document`): scaled-basis coefficients, covariance, raw
+coefficients with standard errors. PX4 (``TC_G<i>_*``, rad/s): offset = sum_k X<k> dT^k,
+dT = clamp(T) - TREF
 (:func:`px4_gyro_parameters`, bias-t order <= 3; loop documents via :func:`basis_from_loop`).
 ArduPilot (``INS_TCAL<i>_*``): rate = raw - P(T - 35) + P(T_cal - 35), P(d) = (c1 d + c2 d^2 + c3 d^3) 1e-6
 (:func:`ardupilot_gyro_parameters`).
@@ -15,59 +16,13 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import FogbayesError
-from ..models.polynomial import PolyBasis, rebase_matrix, to_raw
+from ..models.polynomial import PolyBasis, rebase_matrix
 
 DEG_H_TO_RAD_S = math.pi / 180.0 / 3600.0
 
 
 class ExportError(FogbayesError):
     """The model cannot be written in the requested format."""
-
-
-def basis_to_dict(basis: PolyBasis) -> dict:
-    return {"covariates": list(basis.names), "terms": basis.labels(),
-            "exponents": [list(e) for e in basis.terms],
-            "centre": list(basis.centre), "scale": list(basis.scale)}
-
-
-def basis_from_dict(d: dict, *, source: str | None = None) -> PolyBasis:
-    """Inverse of :func:`basis_to_dict` (raises a FogbayesError on a malformed document)."""
-    from ..data.documents import check_basis
-
-    check_basis(d, source=source)  # shapes, finite centres, positive scales, exponents 0..8
-    try:
-        return PolyBasis(tuple(d["covariates"]), tuple(tuple(int(x) for x in e) for e in d["exponents"]),
-                         tuple(float(x) for x in d["centre"]), tuple(float(x) for x in d["scale"]))
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ExportError(f"the fit document's basis is malformed ({exc!r})", file=source,
-                          field="params.basis",
-                          fix="pass a document written by 'fogbayes fit'") from None
-
-
-def coefficient_document(basis: PolyBasis, coef, cov=None, *, units: dict | None = None,
-                         valid_range: dict | None = None, raw=None) -> dict:
-    """JSON-able coefficients: scaled (exact) and raw (powers of the covariates, origin 0).
-
-    ``raw``: the raw coefficients (and covariance, with ``cov``) when already computed
-    (a fleet converts all its sensors at once with ``rebase_matrices``).
-    """
-    coef = np.asarray(coef, dtype=float)
-    doc = {"basis": basis_to_dict(basis), "coef": coef.tolist()}
-    if cov is not None:
-        cov = np.asarray(cov, dtype=float)
-        raw, raw_cov = to_raw(coef, basis, cov) if raw is None else raw
-        doc.update(covariance=cov.tolist(), stderr=np.sqrt(np.diag(cov)).tolist())
-        doc["raw"] = {"terms": basis.labels(), "coef": raw.tolist(),
-                      "stderr": np.sqrt(np.clip(np.diag(raw_cov), 0, None)).tolist()}
-    else:
-        raw = to_raw(coef, basis) if raw is None else raw
-        doc["raw"] = {"terms": basis.labels(), "coef": np.asarray(raw).tolist()}
-    doc["raw"]["form"] = "sum_k coef_k * prod_c covariate_c ** exponent_kc (origin 0)"
-    if units:
-        doc["units"] = dict(units)
-    if valid_range:
-        doc["valid_range"] = {k: [float(v[0]), float(v[1])] for k, v in valid_range.items()}
-    return doc
 
 
 def px4_gyro_parameters(axes: Sequence[tuple[PolyBasis, np.ndarray]], *, gyro_index: int = 0,

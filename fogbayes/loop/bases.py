@@ -18,6 +18,8 @@ from ..effects.terms import Term
 from ..errors import FogbayesError, MissingColumnError
 from ..composite.model import OrdersError, read_orders
 from ..effects import REGISTRY
+from ..effects.periodic import Periodic
+from ..effects.simulator_only import MarkovNoise
 
 MODELS = ("bias-t", "thermal", "composite", "allan")
 
@@ -27,7 +29,7 @@ ALLOWED: dict[str, tuple[str, ...] | None] = {
     "bias-t": None,
     "thermal": None,
     "composite": None,
-    "allan": ("markov_noise", "periodic"),
+    "allan": (MarkovNoise.name, Periodic.name),
 }
 
 

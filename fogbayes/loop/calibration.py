@@ -16,6 +16,7 @@ import numpy as np
 
 from ..diagnose.context import spike_flags
 from ..diagnose.covariates import block_grid, covariates_of
+from ..effects import REGISTRY
 from ..effects.terms import KINDS, Term, design, labels
 from ..data.units import convert_rate
 from .compensate import solve_rate
@@ -30,18 +31,20 @@ OMEGA_KINDS = ("omega_poly", "omega_abs", "omega_tpoly")
 TARGET_BLOCKS = 2500
 RATE_WINDOW_S = 60.0
 
-PROCESSING = {
-    "time_origin": "first sample of the recording (taken as power-on)",
-    "temperature_rate": "Savitzky-Golay (order 2) slope of block-mean temperature over "
-                        "rate_window_s, chamber corners kept; deg C/min of the first channel",
-    "rate_window_s": RATE_WINDOW_S,
-    "target_blocks": TARGET_BLOCKS,
-    "outliers": "isolated spikes of the first difference beyond 6 sigma_MAD: flagged, left "
-                "out of the fit, kept (compensated) in the output",
-    "lag": "first-order lag started at the first sample's temperature",
-    "fit": "generalised least squares on block means; white + flicker + random-walk "
-           "(+ Gauss-Markov) noise by maximum likelihood",
-}
+
+def processing() -> dict[str, Any]:
+    """The calibration's ``processing`` section: the time origin, each registered effect's
+    covariates (:attr:`fogbayes.effects.Effect.processing`), the block grid, outliers, fit."""
+    return {
+        "time_origin": "first sample of the recording (taken as power-on)",
+        **{k: v for fx in REGISTRY.values() for k, v in fx.processing.items()},
+        "rate_window_s": RATE_WINDOW_S,
+        "target_blocks": TARGET_BLOCKS,
+        "outliers": "isolated spikes of the first difference beyond 6 sigma_MAD: flagged, left "
+                    "out of the fit, kept (compensated) in the output",
+        "fit": "generalised least squares on block means; white + flicker + random-walk "
+               "(+ Gauss-Markov) noise by maximum likelihood",
+    }
 
 
 def _range(x) -> list[float] | None:
@@ -72,7 +75,7 @@ def calibration_json(fit, ctx, model: str) -> dict[str, Any]:
             "coefficients": [float(b) for b in nf.beta],
             "stderr": [float(s) for s in np.sqrt(np.clip(np.diag(cb), 0.0, None))],
             "covariance": cb.tolist(),
-            "processing": {**PROCESSING, "block_s": float(ctx.grid.dt)},
+            "processing": {**processing(), "block_s": float(ctx.grid.dt)},
             "valid": valid,
             "noise": {"white_variance_block": float(nf.sigma2), "block_s": float(nf.spec.dt),
                       "flicker_bank": bool(nf.spec.bank_taus),

@@ -20,6 +20,7 @@ from ..diagnose.bartlett import bartlett_factor, in_walk_mode, leaves_walk_mode
 from ..diagnose import evidence as ev
 from ..diagnose.candidates import candidates_for
 from ..effects import REGISTRY
+from ..effects.simulator_only import MarkovNoise
 from ..diagnose.context import Context, make_context
 from ..diagnose.fitting import ModelFit, fit_terms
 from ..diagnose.noise_prior import NoisePrior
@@ -298,7 +299,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     if noise_prior is not None:  # the cap is on the absolute walk: it needs the white level
         ctx = ctx._replace(spec=noise_prior.capped(ctx.spec, fit.noise.sigma2))
         fit = fit_terms(ctx, base)
-    markov = allowed is None or "markov_noise" in allowed
+    markov = allowed is None or MarkovNoise.name in allowed
     noise_rows: list[dict] = []
     if markov:
         tell(0, max_steps, "choosing the noise model")

@@ -13,6 +13,8 @@ import numpy as np
 
 from .. import effects as fx
 from ..data import Recording
+from ..effects.simulator_only import Paper004
+from ..effects.temperature_order import TemperatureOrder
 from ..simulate.registry import EFFECTS
 from ..simulate.scenarios import simulate
 
@@ -43,7 +45,7 @@ def _scaled(name: str, magnitude: float, params: dict | None) -> dict:
     for k in fx.get(name).size_keys:  # the parameters that set its size
         if k in base and base[k] is not None:
             out[k] = magnitude * base[k]
-    if name == "temperature_order":  # the scenario's quadratic plus a cubic term
+    if name == TemperatureOrder.name:  # the scenario's quadratic plus a cubic term
         out = {"coeffs": [0.5, 0.01, 2e-4, magnitude * base["coeffs"][3]], "T_ref": 20.0}
     out.update(params or {})
     return out
@@ -65,8 +67,8 @@ def make_record(effect: str | None = None, *, seed: int, duration: float = 3 * 3
     effects: dict = {}
     if profile == "paper004":
         opts = {"soak": max((duration - 12000.0) / 4.0, 600.0), "ramp_rate": 1.0}
-        effects["paper004"] = None
-        effects["temperature_order"] = {"coeffs": [0.5, 0.01, 2e-4], "T_ref": 20.0}
+        effects[Paper004.name] = None
+        effects[TemperatureOrder.name] = {"coeffs": [0.5, 0.01, 2e-4], "T_ref": 20.0}
     if effect is not None:
         effects[effect] = _scaled(effect, magnitude, effect_params)
     mix = NOISE_MIXES[noise] if isinstance(noise, str) else dict(noise)

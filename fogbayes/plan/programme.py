@@ -14,6 +14,7 @@ import numpy as np
 
 from ..diagnose.context import make_context
 from ..diagnose.evidence import whiten_columns
+from ..effects import REGISTRY
 from ..effects.terms import Term
 from ..loop.bases import base_terms
 from ..simulate.profiles import Ramp, Soak, segments_json, thermal_test_segments
@@ -26,17 +27,31 @@ N_TAUS = 48
 
 
 class Pair(NamedTuple):
-    """A true effect and the rival the loop might take instead."""
+    """A true effect and the rival the loop might take instead (names in
+    :data:`fogbayes.effects.REGISTRY`)."""
 
-    truth: str        # "thermal_lag" or "temperature_rate"
-    rival: str        # "temperature_gradient", "thermal_lag" or "temperature_rate"
-    coeff: float      # true coefficient: deg/h per deg C (lag), per deg C/min (rate)
-    tau: float | None = None  # the true lag's time constant (s)
+    truth: str
+    rival: str
+    coeff: float      # true coefficient in the truth's unit (e.g. deg/h per deg C for a lag)
+    tau: float | None = None  # the truth's time constant (s) when it has a searched one
 
     @property
     def label(self) -> str:
         t = f"{self.truth} (tau {self.tau:g} s)" if self.tau else self.truth
         return f"{t} vs {self.rival}"
+
+
+def rivals(name: str) -> list[str]:
+    """The effects a programme must tell ``name`` from: the other registered effects marked
+    ``separable_by_programme``, the latest registered first."""
+    return [n for n, fx in reversed(REGISTRY.items()) if fx.separable_by_programme and n != name]
+
+
+def pairs_for(truths: dict) -> list[Pair]:
+    """Each true effect against each of its :func:`rivals`. ``truths``: effect name ->
+    (true coefficient, true time constants), ``[None]`` for an effect without one."""
+    return [Pair(name, rival, coeff, tau) for name, (coeff, taus) in truths.items()
+            for rival in rivals(name) for tau in taus]
 
 
 class Score(NamedTuple):
@@ -91,17 +106,13 @@ def design_record(segments, *, duration: float, fs: float, lags: Sequence[float]
 
 
 def _columns(ctx, pairs: Sequence[Pair]) -> tuple[np.ndarray, dict]:
-    """Block columns of the base model, each family's grid and each true effect."""
+    """Block columns of the base model, each effect's family
+    (:meth:`~fogbayes.effects.Effect.programme_terms`) and each true effect."""
     base = base_terms(ctx, "bias-t")
-    T = ctx.cov.T[:, 0]
-    c = 0.5 * (T.max() + T.min())
-    lo, hi = max(60.0, 3 * ctx.grid.dt), 0.5 * ctx.cov.duration
-    lag = lambda tau: Term("lag", {"channel": 0, "tau": float(tau), "centre": c, "scale": 1.0})
-    fam = {"temperature_gradient": [Term("gradient", {"a": 0, "b": 1, "scale": 1.0})],
-           "thermal_lag": [lag(t) for t in np.geomspace(lo, hi, N_TAUS)],
-           "temperature_rate": [Term("rate", {"scale": 1.0})]}
-    truth = {p.label: (lag(p.tau) if p.truth == "thermal_lag" else fam[p.truth][0])
-             for p in pairs}
+    names = dict.fromkeys(n for p in pairs for n in (p.truth, p.rival))
+    fam = {n: REGISTRY[n].programme_terms(ctx, N_TAUS) for n in names}
+    truth = {p.label: REGISTRY[p.truth].programme_terms(
+        ctx, N_TAUS, None if p.tau is None else {"tau": p.tau})[0] for p in pairs}
     blocks, index = [ctx.block_design(base)], {}
     at = blocks[0].shape[1]
     for name, terms in list(fam.items()) + [(k, [v]) for k, v in truth.items()]:
@@ -169,7 +180,8 @@ def score(name: str, segments, pairs: Sequence[Pair], noise, *, duration: float,
     for p in pairs:
         mu = p.coeff * col(p.label)[:, 0]
         lam[p.label] = noncentrality(mu, col(p.rival))
-        own = np.column_stack([col(p.truth), mu[:, None]]) if p.truth == "thermal_lag" \
+        # a searched time constant may fall between the family's grid: the truth joins it
+        own = np.column_stack([col(p.truth), mu[:, None]]) if p.tau is not None \
             else col(p.truth)
         pw[p.label] = duel_power(mu, own, col(p.rival), seed=seed) if power else None
     return Score(name, segments_json(segments), lam, pw)

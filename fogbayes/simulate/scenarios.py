@@ -13,6 +13,8 @@ import numpy as np
 
 from ..data.recording import Metadata, Recording
 from ..data.units import RATE_UNITS_IN_DEG_H, RAW_UNITS, normalise_unit
+from ..effects.simulator_only import Paper004
+from ..effects.temperature_order import TemperatureOrder
 from . import effects as fx
 from . import profiles as pf
 from ._checks import SimulationParameterError, positive, seed_int
@@ -75,8 +77,8 @@ def _thermal(fs, duration, *, lags=(300.0, 900.0), input_rate=None, segments=Non
         levels = {**levels, "segments": pf.segments_json(segments)}
     cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size),
                     rates=p.rates)
-    return _Base(cov, p.names, {}, {"temperature_order": {"coeffs": [0.5, 0.01, 2e-4],
-                                                          "T_ref": 20.0}},
+    return _Base(cov, p.names, {}, {TemperatureOrder.name: {"coeffs": [0.5, 0.01, 2e-4],
+                                                            "T_ref": 20.0}},
                  {"N": 0.005, "B": 0.02, "K": 0.02},
                  {"kind": "thermal_test", "duration": duration or 6.3 * 3600.0,
                   "lags": list(p.lags), **levels}, fs or 10.0)
@@ -93,8 +95,8 @@ def _paper004(fs, duration, *, soak=7200.0, ramp_rate=0.5, lags=(300.0, 900.0),
     cov = _rate_cov(p.time, p.temperatures, p.chamber, _input(input_rate, p.time.size),
                     rates=p.rates)
     return _Base(cov, p.names, {},
-                 {"paper004": {"c": [0.3, 0.03, 6e-4], "d": [4.0, 0.0], "cross": 0.0,
-                               "T_ref": 20.0}},
+                 {Paper004.name: {"c": [0.3, 0.03, 6e-4], "d": [4.0, 0.0], "cross": 0.0,
+                                  "T_ref": 20.0}},
                  {"N": 0.008, "B": 0.05},
                  {"kind": "paper004", "soak": soak, "ramp_rate": ramp_rate, "lags": list(lags),
                   **temps}, fs or 1.0)
@@ -139,8 +141,8 @@ def _paper000(fs, duration, *, dwell=60.0, temperatures=pf.PAPER000_TEMPERATURES
 def _ratetable(fs, duration, *, dwell=60.0, temperatures=pf.PAPER000_TEMPERATURES,
                rates=pf.PAPER000_RATES, restart="cell") -> _Base:
     cov, prof = _grid(fs, duration, temperatures, rates, dwell, restart)
-    return _Base(cov, ("temperature",), {}, {"temperature_order": {"coeffs": [0.5, 0.01, 2e-4],
-                                                                   "T_ref": 20.0}},
+    return _Base(cov, ("temperature",), {}, {TemperatureOrder.name: {
+                     "coeffs": [0.5, 0.01, 2e-4], "T_ref": 20.0}},
                  {"N": 0.005, "B": 0.02}, prof, fs or 1.0)
 
 

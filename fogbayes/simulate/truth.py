@@ -37,7 +37,8 @@ class Truth(NamedTuple):
     effects: deterministic component of every effect by name ("input" is the nominal
         response to the input rate, scale * omega; paper 000's model appears as
         "paper000_scale", "paper000_bias", "paper000_drift"; paper 004's as "paper004").
-    noise_parts: stochastic components ("allan", "markov_noise", "arma", "sinusoid").
+    noise_parts: stochastic components ("allan", "arma", "sinusoid", and each stochastic
+        effect by its name).
     params: JSON-able true parameters: {"scenario", "seed", "fs", "unit",
         "scale_factor", "effects": {name: params}, "noise": {...}, "profile": {...}}.
     covariates: the true drivers (see :class:`Covariates`); recorded temperatures may

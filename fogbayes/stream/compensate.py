@@ -71,7 +71,7 @@ def compensate_stream(source, fit: dict, out, *, rows: int = DEFAULT_ROWS, flags
 
 def _thermal(source, fit, out, rows, flags, include_time, metrics, dtype):
     from ..thermal.compensate_loops import compensate_into
-    from ..export.coefficients import basis_from_dict
+    from ..models.basis_document import basis_from_dict
     from ..thermal.model import ThermalSpec
     from ..thermal.data import Processing
     from ..thermal.workflow import check_fit_document, clamp_covariates
@@ -144,7 +144,7 @@ def _thermal(source, fit, out, rows, flags, include_time, metrics, dtype):
 
 
 def _composite(source, fit, out, rows, include_time, dtype):
-    from ..composite.cells import operating_time_chunk
+    from ..preprocess.operating_time import operating_time_chunk
     from ..composite.workflow import compensator_from_fit
 
     unit = (fit.get("input") or {}).get("unit")
@@ -164,7 +164,7 @@ def _composite(source, fit, out, rows, include_time, dtype):
     with open_sink(out, source.n, cols) as sink:  # an exception removes the partial output
         for ch in source.chunks(rows, fields=fields):
             t = ch.time
-            if by_cell:  # fogbayes.composite.cells.operating_time, carried across chunks
+            if by_cell:  # fogbayes.preprocess.operating_time, carried across chunks
                 op, carry = operating_time_chunk(t, ch.input_rate, carry)
             else:
                 origin_t = float(t[0]) if origin_t is None else origin_t

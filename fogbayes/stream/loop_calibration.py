@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..composite.cells import operating_time_chunk
+from ..preprocess.operating_time import operating_time_chunk
 from ..diagnose.context import MAD_TO_SIGMA, spikes_between
 from ..diagnose.covariates import (Covariates, block_index, block_step, grid_of_counts,
                                    rate_curve, rate_window)

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..data.documents import FIT_SCHEMA, validate_in_memory
 from ..errors import FogbayesError, NonFiniteError, TooShortError
-from ..export.coefficients import basis_from_dict, coefficient_document
+from ..models.basis_document import basis_from_dict, coefficient_document
 from ..inference.compare import rms_criterion, select_order
 from ..inference.lsq import conditioning, identifiability, lstsq
 from ..stats.stability import DEFAULT_WINDOWS, segment_report

@@ -24,6 +24,7 @@ class DemoResult(NamedTuple):
 def run_demo(out_dir: str | Path = "fogbayes_demo", *, seed: int = 0, duration: float | None = None,
              fs: float | None = None, step: Callable[[str], None] = lambda s: None) -> DemoResult:
     """Run the demonstration and write ``report.html`` and the recording into ``out_dir``."""
+    from ..effects.temperature_rate import TemperatureRate
     from ..simulate import simulate
     from ..stats.allan import allan_deviation
     from ..thermal.workflow import compensate_recording, fit_recording
@@ -32,7 +33,7 @@ def run_demo(out_dir: str | Path = "fogbayes_demo", *, seed: int = 0, duration: 
     out.mkdir(parents=True, exist_ok=True)
     step("simulating a thermal-chamber test")
     sim = simulate("thermal", seed=seed, duration=duration, fs=fs,
-                   effects={"temperature_rate": {}})
+                   effects={TemperatureRate.name: {}})
     rec = sim.recording
     rec_path = save(rec, out / "demo_recording.csv")
 
