@@ -133,6 +133,12 @@ def added_reading_options() -> dict:
     return load_keywords(_READING["added"])
 
 
+def reading_options() -> dict:
+    """The running command's reading options that :func:`add_reading_options` gave it, by
+    parameter name (``axis``, ``column``, ``output_unit``, ...), as the user set them."""
+    return dict(_READING["added"])
+
+
 def _flags(param: inspect.Parameter) -> tuple:
     return tuple(getattr(param.default, "param_decls", None) or ())
 

@@ -11,10 +11,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
-                      TIME_COLUMN_OPT, refuse_overwrite, say, write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, fit_channels
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, fit_channels, reading_options,
+                      refuse_overwrite, say, write_json)
 
 _TAUS = ("octave", "decade", "dense", "all")
 _KINDS = ("oadev", "adev", "mdev", "tdev", "ohdev", "hdev", "totdev", "mtotdev", "ttotdev",
@@ -86,16 +84,7 @@ def allan(
                                help="Datasheet prior (written by 'fogbayes prior'), with "
                                     "--bayes: log-normal priors on the terms it gives."),
     plot: Path = typer.Option(None, "--plot", help="Also write the log-log ADEV figure (PNG/PDF)."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Allan deviation with 90 % intervals and the five-term noise fit (Q, N, B, K, R).
@@ -148,12 +137,9 @@ def allan(
         from ..plot.style import figure_format
 
         figure_format(plot)  # an unknown extension fails now, not after the fit
-    load_kw = dict(time_column=time_column, output_unit=output_unit,
-                   scale_factor=scale_factor, time_unit=time_unit,
-                   temperature_scale=temperature_scale, temperature_offset=temperature_offset,
-                   topic=topic, instance=instance)
+    axis, column = (reading_options()[k] for k in ("axis", "column"))
     docs, doc = fit_channels(
-        rec, axis, column, load_kw,
+        rec, axis, column, {"time_unit": time_unit},
         lambda r: fit_recording(r, model="allan", bayes=bayes, seed=seed, taus=taus,
                                 per_decade=per_decade, prior=sheet, kind=kind,
                                 bias_corrected=bias_corrected),

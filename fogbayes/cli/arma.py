@@ -7,11 +7,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG, SCALE_FACTOR_OPT,
-                      TIME_COLUMN_OPT, load_recording, progress, refuse_overwrite, say,
-                      write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, load_recording, progress,
+                      refuse_overwrite, say, write_json)
 
 
 @app.command()
@@ -32,16 +29,7 @@ def arma(
     seed: int = typer.Option(0, help="Random seed of the Bayesian sampler."),
     plot: Path = typer.Option(None, "--plot", help="Write a PNG: ACF/PACF, one-step "
                               "prediction, filtered signal and removed noise."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Identify, fit and check an ARMA model of the gyro drift; filter the record.
@@ -68,11 +56,7 @@ def arma(
         from ..plot.style import figure_format
 
         figure_format(plot)  # an unknown extension fails now, not after the fit
-    rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=output_unit, scale_factor=scale_factor,
-                         time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset,
-                         topic=topic, instance=instance, axis=axis)
+    rec = load_recording(rec_path, time_unit=time_unit)
     with progress("fitting ARMA candidates"), about_file(rec_path):
         result = analyse_recording(rec, decimate=decimate, detrend_order=detrend,
                                    candidates=candidates, criterion=criterion, lags=lags,

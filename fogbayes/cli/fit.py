@@ -13,11 +13,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
-                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT,
-                      refuse_overwrite, say, write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT, channels, fit_channels
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, channels, fit_channels,
+                      reading_options, refuse_overwrite, say, write_json)
 
 
 #: The type of each known ``-O KEY=VALUE`` model option (the workflows' keywords): checked
@@ -154,18 +151,7 @@ def fit(
         help="bias-t/thermal: 'ols' (least squares on 1 s blocks, paper 004) or 'gls' (the "
              "closed loop's fit with no step added: GLS under the white + flicker + random-walk "
              "noise model, honest standard errors; writes the loop document)."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
-    input_rate: str = INPUT_RATE_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Fit a model to a recording, print the result and (with --json) write the fit document.
@@ -192,6 +178,7 @@ def fit(
     for key, value in (("processing", processing), ("noise", noise)):
         if value is not None:
             options[key] = value
+    axis, column = (reading_options()[k] for k in ("axis", "column"))
     gls = _gls_check(estimator, model, orders, bayes, options, axis, column)
     from ..data.logs.firmware import rate_warnings
 
@@ -207,11 +194,7 @@ def fit(
             doc["warnings"] = list(doc.get("warnings") or []) + more
         return doc
 
-    load_kw = dict(time_column=time_column, output_unit=output_unit,
-                   scale_factor=scale_factor, temperature=temperature, input_rate=input_rate,
-                   time_unit=time_unit, temperature_scale=temperature_scale,
-                   temperature_offset=temperature_offset, topic=topic, instance=instance)
-    docs, doc = fit_channels(rec, axis, column, load_kw, fit_one,
+    docs, doc = fit_channels(rec, axis, column, {"time_unit": time_unit}, fit_one,
                              f"fitting {model}" + (" (posterior)" if bayes else ""))
     if json_out is not None:
         write_json(doc, json_out)

@@ -8,11 +8,8 @@ import numpy as np
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
-                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      refuse_overwrite, time_notes, write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, load_recording, refuse_overwrite,
+                      time_notes, write_json)
 
 
 def summary_document(rec, rec_path, time_unit: str | None = None) -> dict:
@@ -83,18 +80,7 @@ def info(
     rec_path: Path = REC_ARG,
     json_out: str = typer.Option(None, "--json", help="Also write the summary as a JSON "
                                  "document ('-' = stdout, instead of the text summary)."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
-    input_rate: str = INPUT_RATE_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Summarise a recording: samples, rate, gaps, temperature and output ranges.
@@ -109,12 +95,7 @@ def info(
       fogbayes info flight.ulg --instance 1 --axis z
     """
     refuse_overwrite({"the recording": rec_path}, {"--json": json_out})
-    rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=output_unit, scale_factor=scale_factor,
-                         temperature=temperature, input_rate=input_rate,
-                         time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset,
-                         topic=topic, instance=instance, axis=axis, tell=False)
+    rec = load_recording(rec_path, time_unit=time_unit, tell=False)
     s = rec.sampling()
     doc = summary_document(rec, rec_path, time_unit)
     if json_out:

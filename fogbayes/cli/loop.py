@@ -12,11 +12,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
-                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      refuse_overwrite, say, write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, load_recording, refuse_overwrite,
+                      say, write_json)
 from .loop_progress import loop_progress
 
 #: Fewer samples than this give a loop without power that looks like a clean result:
@@ -69,18 +66,7 @@ def loop(
         help="Cap the random walk by a static run: a 'fogbayes allan --json' document "
              "(its K interval's upper end), a 'fogbayes prior' datasheet (K x looseness) "
              "or {\"K\": value} in deg/h^1.5."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
-    input_rate: str = INPUT_RATE_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Run fit -> diagnose -> add effect -> refit until nothing more is supported.
@@ -125,12 +111,7 @@ def loop(
         from ..diagnose.noise_prior import read_noise_prior
 
         prior = read_noise_prior(noise_prior)
-    rec = load_recording(rec_path, column=column, time_column=time_column,
-                         output_unit=output_unit, scale_factor=scale_factor,
-                         temperature=temperature, input_rate=input_rate,
-                         time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset,
-                         topic=topic, instance=instance, axis=axis)
+    rec = load_recording(rec_path, time_unit=time_unit)
     if rec.n < LOOP_MIN_SAMPLES:
         raise TooShortError(f"the closed loop needs at least {LOOP_MIN_SAMPLES} samples (20 "
                             f"blocks or more, residual tests over 20 lags), the recording has "

@@ -13,9 +13,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (AXIS_OPT, COLUMN_OPT, INSTANCE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
-                      SCALE_FACTOR_OPT, TIME_COLUMN_OPT, TIME_UNIT_OPT, TOPIC_OPT, channels,
-                      load_recording, progress, refuse_overwrite, say, write_json)
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, channels, load_recording, progress,
+                      reading_options, refuse_overwrite, say, write_json)
 
 
 _FLAGS = {"term": "--term", "terms": "--terms", "precision": "--precision", "level": "--level",
@@ -38,14 +37,7 @@ def plan(
                                    "dropped); e.g. Q,N,B,K when the rate has no ramp."),
     json_out: str = typer.Option(None, "--json",
                                  help="Also write the plan document ('-' = stdout)."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """How long must a static run be to know a noise term to +-x %? Planned from a pilot.
@@ -78,13 +70,11 @@ def plan(
         raise FogbayesError(f"--terms {terms!r} must name terms among {', '.join(TERMS)} and "
                             f"include --term {name}", column="--terms",
                             fix=f"give e.g. --terms Q,N,B,K (with {name})")
-    picks = channels(axis, column)
+    picks = channels(*(reading_options()[k] for k in ("axis", "column")))
     if len(picks) > 1:
         raise FogbayesError("plan reads one channel at a time", column="--axis/--column",
                             fix="give one axis (--axis x) or one column, and run plan per axis")
-    rec = load_recording(pilot, time_column=time_column, output_unit=output_unit,
-                         scale_factor=scale_factor, time_unit=time_unit, topic=topic,
-                         instance=instance, **picks[0][1])
+    rec = load_recording(pilot, time_unit=time_unit, **picks[0][1])
     try:
         with progress("Fitting the pilot and planning"), about_file(pilot):
             doc = plan_recording(rec, name, precision, level=level, max_days=max_days,

@@ -9,11 +9,8 @@ import typer
 
 from ..errors import FileFormatError
 from ._app import app
-from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, REC_ARG,
-                      SCALE_FACTOR_OPT, TEMPERATURE_OPT, TIME_COLUMN_OPT, load_recording,
-                      progress, refuse_overwrite, say)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import AXIS_OPT, INSTANCE_OPT, TOPIC_OPT
+from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, load_recording, progress,
+                      reading_options, refuse_overwrite, say)
 
 
 def _read_json(path: Path, what: str) -> dict:
@@ -51,18 +48,7 @@ def report(
     bayes: bool = typer.Option(False, help="Posterior intervals (NumPyro) with --model."),
     pdf: Path = typer.Option(None, help="Also print the report to this PDF (headless Chromium)."),
     seed: int = typer.Option(0, help="Random seed of the samplers."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    topic: str = TOPIC_OPT,
-    instance: int = INSTANCE_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
-    input_rate: str = INPUT_RATE_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Write a calibration report: recording, fitted model, residuals, compensation, noise.
@@ -86,13 +72,10 @@ def report(
     fit_doc = read_calibration(fit) if fit else None  # fit, loop or axes document, validated
     # a multi-axis document: its axes share the recording, and so its unit
     unit_doc = per_axis(fit_doc)[0][1] if fit_doc else None
-    rec = load_recording(rec_path, column=column, time_column=time_column,
+    output_unit = reading_options()["output_unit"]
+    rec = load_recording(rec_path, time_unit=time_unit,
                          output_unit=agreed_unit(unit_doc, str(fit), rec_path, output_unit)
-                         if fit_doc else output_unit, scale_factor=scale_factor,
-                         temperature=temperature, input_rate=input_rate,
-                         time_unit=time_unit, temperature_scale=temperature_scale,
-                         temperature_offset=temperature_offset,
-                         topic=topic, instance=instance, axis=axis)
+                         if fit_doc else output_unit)
     loop_res = None
     from ..data.atomic import all_or_none, pending
 
