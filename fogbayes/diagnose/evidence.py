@@ -57,20 +57,23 @@ class Screened(NamedTuple):
 def whiten_columns(ctx: Context, spec, theta, Y: np.ndarray) -> np.ndarray:
     """Whitened (n_obs, c) columns of block-level Y (n_blocks, c) under noise ``theta``."""
     W, _ = ns.whiten(spec, theta, Y, ctx.grid.mask, ctx.grid.w)
-    return W[ctx.grid.mask > 0]
+    obs = ctx.grid.mask > 0
+    return W if obs.all() else W[obs]
 
 
 def whitened_model(ctx: Context, fit: ModelFit, *, n_sims: int, seed: int,
-                   extra: np.ndarray | None = None) -> tuple[Whitened, np.ndarray | None]:
+                   extra: np.ndarray | list[np.ndarray] | None = None
+                   ) -> tuple[Whitened, np.ndarray | None]:
     """Whiten the model, ``n_sims`` series simulated from its noise model and ``extra`` columns.
 
     One filter pass for everything (the gains are shared); returns the whitened model and
-    the whitened ``extra`` (n_obs, c) block columns (candidate terms), or None.
+    the whitened ``extra`` (n_obs, c) block columns (candidate terms; an array or a list of
+    (n_blocks, k) arrays, side by side), or None.
     """
     spec, theta = fit.noise.spec, fit.noise.theta
     sims = nullsim.simulate(spec, theta, 1.0, ctx.grid.w, n_sims, seed=seed)
-    blocks = [ctx.y[:, None], fit.X, sims] + ([extra] if extra is not None else [])
-    W = whiten_columns(ctx, spec, theta, np.column_stack(blocks))
+    more = [] if extra is None else list(extra) if isinstance(extra, list) else [extra]
+    W = whiten_columns(ctx, spec, theta, np.column_stack([ctx.y[:, None], fit.X, sims] + more))
     p = fit.X.shape[1]
     Qx, _ = np.linalg.qr(W[:, 1:1 + p])
     r = W[:, 0] - Qx @ (Qx.T @ W[:, 0])
@@ -143,24 +146,29 @@ def candidate_columns(ctx: Context, cand: Candidate) -> list[np.ndarray]:
     return [columns(tm, ctx.bcov) for tm in cand.grid]
 
 
+#: one-column grid points screened per matrix product in :func:`_grid_stats`
+GRID_CHUNK = 256
+
+
 def _grid_stats(wm: Whitened, Zw: np.ndarray, ks: list[int], tol: float = 1e-6):
     """2 dlogL of each grid point (data and simulations); None where not identifiable.
 
-    One-column grid points (most) are done together: normalise the design-orthogonal part
-    of each whitened column and take one matrix product with [r, E].
+    One-column grid points (most) are done together, :data:`GRID_CHUNK` at a time: normalise
+    the design-orthogonal part of each whitened column and take one matrix product with [r, E].
     """
     n_g = len(ks)
     obs = np.full(n_g, np.nan)
     sims = np.full((n_g, wm.E.shape[1]), np.nan)
     starts = np.concatenate([[0], np.cumsum(ks)[:-1]]).astype(int)
     one = [g for g in range(n_g) if ks[g] == 1]
-    if one:
-        Z = Zw[:, starts[one]]
+    for a in range(0, len(one), GRID_CHUNK):  # a chunk at a time: a few copies of it live
+        part = one[a:a + GRID_CHUNK]
+        Z = Zw[:, starts[part]]
         Zp = Z - wm.Qx @ (wm.Qx.T @ Z)
         nz, nzp = np.linalg.norm(Z, axis=0), np.linalg.norm(Zp, axis=0)
         ok = (nz > 0) & (nzp > tol * np.maximum(nz, 1e-300))
         U = Zp[:, ok] / nzp[ok]
-        idx = np.asarray(one)[ok]
+        idx = np.asarray(part)[ok]
         obs[idx] = (U.T @ wm.r) ** 2 / wm.s2
         sims[idx] = (U.T @ wm.E) ** 2 / wm.e_s2
     for g in range(n_g):
@@ -243,8 +251,9 @@ def screen(ctx: Context, fit: ModelFit, cands: list[Candidate], *, n_sims: int =
     lin = [c for c in cands if c.kind == "linear"]
     Zs = [candidate_columns(ctx, c) for c in lin]
     flat = [z for zs in Zs for z in zs]
-    extra = np.column_stack(flat) if flat else None
-    wm, Zw = whitened_model(ctx, fit, n_sims=n_sims, seed=seed, extra=extra)
+    wm, Zw = whitened_model(ctx, fit, n_sims=n_sims, seed=seed, extra=flat or None)
+    del flat  # the block columns are whitened: only their widths are needed below
+    Zs = [[np.empty((0, z.shape[1])) for z in zs] for zs in Zs]
     out, j = [], 0
     for c, zs in zip(lin, Zs):
         k = sum(z.shape[1] for z in zs)

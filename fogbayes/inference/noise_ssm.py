@@ -278,26 +278,52 @@ def whiten_raw(spec: NoiseSpec, theta, Y, mask, w):
     return _filter(phi, q, p0, Y * mask[:, None], mask, w)
 
 
-def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
-    """:func:`whiten_raw` with the columns zero-padded to a power of four (>= ``minimum``).
+#: the widest program :func:`filter_padded` runs; wider inputs go through it in chunks
+MAX_FILTER_COLUMNS = 256
 
-    Few distinct shapes means few compilations (a compile costs seconds, a pass over a
-    few thousand blocks milliseconds). Returns NumPy (V (n, C), F (n,)).
-    """
-    Y = np.asarray(Y, float)
+
+def _padded_filter(spec: NoiseSpec, theta, Y: np.ndarray, mask, w, minimum: int):
+    """One :func:`whiten_raw` call on Y's columns zero-padded to a power of four."""
     c = Y.shape[1]
     C = max(minimum, 4 ** int(math.ceil(math.log(max(c, 1), 4) - 1e-9)))
     Yp = np.zeros((Y.shape[0], C))
     Yp[:, :c] = Y
-    V, F = whiten_raw(spec, jnp.asarray(theta, dtype=float), jnp.asarray(Yp),
+    return whiten_raw(spec, jnp.asarray(theta, dtype=float), jnp.asarray(Yp),
                       jnp.asarray(mask, dtype=float), jnp.asarray(w, dtype=float))
-    return np.asarray(V)[:, :c], np.asarray(F)
+
+
+def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
+    """:func:`whiten_raw` with the columns zero-padded to a power of four (>= ``minimum``).
+
+    Few distinct shapes means few compilations (a compile costs seconds, a pass over a
+    few thousand blocks milliseconds). More than :data:`MAX_FILTER_COLUMNS` columns go
+    through that width's program a chunk at a time into one output: the columns share the
+    gains and are filtered independently, so the values are the same, and the memory is
+    the output plus one chunk (a screening whitens thousands of candidate columns).
+    Returns NumPy (V (n, C), F (n,)).
+    """
+    Y = np.asarray(Y, float)
+    c = Y.shape[1]
+    if c <= MAX_FILTER_COLUMNS:
+        V, F = _padded_filter(spec, theta, Y, mask, w, minimum)
+        return np.asarray(V)[:, :c], np.asarray(F)
+    out = np.empty(Y.shape)
+    for j in range(0, c, MAX_FILTER_COLUMNS):
+        part = Y[:, j:j + MAX_FILTER_COLUMNS]
+        V, F = _padded_filter(spec, theta, part, mask, w, minimum)
+        out[:, j:j + part.shape[1]] = np.asarray(V)[:, :part.shape[1]]
+        del V
+    return out, np.asarray(F)
 
 
 def whiten(spec: NoiseSpec, theta, Y, mask, w):
     """Whitened columns L^-1 Y (n, C): innovations / sqrt(F), 0 at missing blocks."""
     V, F = filter_padded(spec, theta, Y, mask, w)
-    return V * (np.asarray(mask) / np.sqrt(F))[:, None], F
+    scale = (np.asarray(mask) / np.sqrt(F))[:, None]
+    if V.flags.writeable:  # a chunked filter's own output: scaled in place
+        V *= scale
+        return V, F
+    return V * scale, F
 
 
 def pointwise_loglik(spec: NoiseSpec, theta, y, X, mask, w, betas, sigma2) -> np.ndarray:
