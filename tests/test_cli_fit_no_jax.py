@@ -1,6 +1,7 @@
-"""``fogbayes fit REC -m bias-t`` is least squares on NumPy: a fresh process that runs it must
-not import JAX or NumPyro (their import is most of the command's wall time), and its document
-is the library's ``fit_recording`` (same coefficients, bit for bit)."""
+"""``fogbayes fit REC -m bias-t`` is least squares on NumPy: a fresh process that runs it on a
+1 h record must not import JAX, NumPyro, Numba or scipy.linalg (their import, and loading
+Numba's cached loops, are most of the command's wall time), and its document is the library's
+``fit_recording`` (same coefficients, bit for bit)."""
 
 from __future__ import annotations
 
@@ -17,10 +18,11 @@ from fogbayes.thermal.workflow import fit_recording
 _CODE = """
 import json, sys
 from fogbayes.cli import main
-after_import = sorted(m for m in ("jax", "numpyro") if m in sys.modules)
+heavy = ("jax", "numpyro", "numba", "scipy.linalg")
+after_import = sorted(m for m in heavy if m in sys.modules)
 rc = main(["-q", "fit", sys.argv[1], "-m", "bias-t", "--json", sys.argv[2]])
 print(json.dumps({"rc": rc, "after_import": after_import,
-                  "after_fit": sorted(m for m in ("jax", "numpyro") if m in sys.modules)}))
+                  "after_fit": sorted(m for m in heavy if m in sys.modules)}))
 """
 
 

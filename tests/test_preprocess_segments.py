@@ -193,9 +193,16 @@ def _merge_reference(labels, t, min_duration):
     return runs
 
 
+@pytest.mark.parametrize("backend", ["segment_loops", "segment_rules"])
 @pytest.mark.parametrize("seed", range(6))
-def test_compiled_merge_equals_the_plain_rule(seed):
-    from fogbayes.preprocess.segment_loops import merge_runs, run_stats
+def test_compiled_merge_equals_the_plain_rule(seed, backend):
+    """Both backends of the one definition (:mod:`fogbayes.preprocess.segment_rules` run as
+    Python, and compiled by Numba) against the reference above; and against each other
+    exactly (integer labels, and the same float operations in the same order)."""
+    import importlib
+
+    loops = importlib.import_module(f"fogbayes.preprocess.{backend}")
+    merge_runs, run_stats = loops.merge_runs, loops.run_stats
 
     rng = np.random.default_rng(seed)
     n = 400
@@ -219,3 +226,10 @@ def test_compiled_merge_equals_the_plain_rule(seed):
             tc = t[a:b] - t[a:b].mean()
             want = 0.0 if b - a < 2 else np.dot(tc, T[s, a:b] - T[s, a:b].mean()) / np.dot(tc, tc)
             assert slope[s, k] == pytest.approx(want, rel=1e-9, abs=1e-13)
+    if backend == "segment_rules":
+        from fogbayes.preprocess import segment_loops as compiled
+
+        other = compiled.merge_runs(labels.astype(float), 0.5, t, end, 30.0)
+        assert all(np.array_equal(a, b) for a, b in zip((lab, start, stop, count), other))
+        np.testing.assert_array_equal(np.stack([mean, slope]), np.stack(
+            compiled.run_stats(T, t, *other[1:])))

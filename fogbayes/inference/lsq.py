@@ -105,16 +105,15 @@ def lstsq(X: Array, y: Array, weights: Array | None = None, *, rcond: float = 1e
 
 
 def _lstsq_numpy(X, y, w, rcond: float) -> FitResult:
-    """:func:`lstsq` in NumPy/LAPACK for concrete inputs (identical formulas)."""
-    from scipy.linalg import solve_triangular as solve_tri
-
+    """:func:`lstsq` in NumPy/LAPACK for concrete inputs (identical formulas; R^-1 by NumPy's
+    solve: R is p x p, and importing scipy.linalg would cost ~0.13 s of a ``fogbayes fit``)."""
     w = np.ones_like(y) if w is None else w
     sw = np.sqrt(w)
     Q, R = np.linalg.qr(X * sw[:, None])
     d = np.abs(np.diag(R))
     full_rank = bool(np.min(d) > rcond * np.max(d))
     p = X.shape[1]
-    Rinv = solve_tri(R, np.eye(p), lower=False) if full_rank else np.linalg.pinv(R, rcond=rcond)
+    Rinv = np.linalg.solve(R, np.eye(p)) if full_rank else np.linalg.pinv(R, rcond=rcond)
     return _finish(X, y, w, sw, Q, Rinv, full_rank, np)
 
 

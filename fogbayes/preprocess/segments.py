@@ -20,8 +20,13 @@ from ._checks import (
     median_step,
     same_length,
 )
-from .segment_loops import merge_runs, run_stats
 from .temperature_rate import temperature_rate
+
+#: below this many samples (rows x length) the rules run as plain Python
+#: (:mod:`.segment_rules`, ~10 us a sample); above, compiled (:mod:`.segment_loops`), whose
+#: import and cache load cost ~0.7 s (measured on the 2-core box: 3 600 samples 3 ms in
+#: Python; 227 000 samples 2.2 s)
+PYTHON_BELOW = 50_000
 
 _KINDS = {0: "soak", 1: "ramp_up", -1: "ramp_down"}
 
@@ -67,7 +72,7 @@ def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60
     """:func:`segment_thermal` of several sensors sampled at ``time``: (sensors, n) deg C.
 
     The smoothed rates of all sensors come from one filter call; labels are merged and each
-    segment's mean and slope computed by compiled loops (:mod:`.segment_loops`).
+    segment's mean and slope computed by :mod:`.segment_rules` (compiled for large inputs).
     """
     t = check_time(time)
     T = np.asarray(temperatures, dtype=float)
@@ -84,11 +89,15 @@ def segment_thermal_rows(time, temperatures, *, rate_threshold: float = 0.1 / 60
     rates = temperature_rate(t, T, method="savgol", window_s=smooth_s, polyorder=1,
                              gap_factor=gap_factor)
     end = np.r_[t[1:], t[-1] + median_step(t)] if t.size > 1 else t + 1.0
-    lab, start, stop, count = merge_runs(rates, float(rate_threshold), t, end,
-                                         float(min_duration))
+    if T.size < PYTHON_BELOW:
+        from . import segment_rules as loops
+    else:
+        from . import segment_loops as loops
+    lab, start, stop, count = loops.merge_runs(rates, float(rate_threshold), t, end,
+                                               float(min_duration))
     R = int(count.max())
     lab, start, stop = lab[:, :R], start[:, :R], stop[:, :R]
-    mean, slope = run_stats(T, t, start, stop, count)
+    mean, slope = loops.run_stats(T, t, start, stop, count)
     lab, start, stop, mean, slope = (x.tolist() for x in (lab, start, stop, mean, slope))
     tl = t.tolist()
     return [[Segment(_KINDS[lab[s][k]], start[s][k], stop[s][k], tl[start[s][k]],

@@ -11,7 +11,6 @@ import threading
 from collections.abc import Callable
 from functools import lru_cache
 
-from ..support.numba_cache import njit_source, numba
 import numpy as np
 
 
@@ -43,6 +42,8 @@ _COMPILED_TERMS: set = set()
 @lru_cache(maxsize=64)
 def _compiled(terms: tuple[tuple[int, ...], ...]) -> Callable:
     _COMPILED_TERMS.add(terms)
+    from ..support.numba_cache import njit_source, numba  # Numba only when a loop is built
+
     return njit_source(_source(terms), "loop", {"prange": numba.prange}, nogil=True,
                        parallel=True)
 
