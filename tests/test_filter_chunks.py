@@ -49,3 +49,20 @@ def test_wide_filter_runs_in_chunks_with_the_values_of_one_pass(monkeypatch):
     W, _ = ns.whiten(spec, theta, Y, mask, w)  # scaled in place: the same as a scaled copy
     scale = (mask / np.sqrt(np.asarray(F1)))[:, None]
     np.testing.assert_array_equal(W, np.asarray(V1)[:, :c] * scale)
+
+
+def test_blocks_side_by_side_whiten_as_their_stack():
+    rng = np.random.default_rng(8)
+    n = 400
+    spec = ns.make_spec(2.0, n * 2.0)
+    theta = np.array([-1.5, -8.0])[:spec.n_theta]
+    mask, w = np.ones(n), np.ones(n)
+    mask[::37] = 0.0
+    blocks = [rng.standard_normal((n, k)) for k in (1, 5, 0, ns.MAX_FILTER_COLUMNS + 3, 40)]
+    W_list, F_list = ns.whiten(spec, theta, blocks, mask, w)  # chunks cross the block edges
+    W_stack, F_stack = ns.whiten(spec, theta, np.column_stack(blocks), mask, w)
+    np.testing.assert_array_equal(W_list, W_stack)
+    np.testing.assert_array_equal(F_list, F_stack)
+    small = blocks[:2]  # one program call, below the chunk width
+    np.testing.assert_array_equal(ns.whiten(spec, theta, small, mask, w)[0],
+                                  ns.whiten(spec, theta, np.column_stack(small), mask, w)[0])

@@ -54,8 +54,9 @@ class Screened(NamedTuple):
     gate_log_p: float | None = None
 
 
-def whiten_columns(ctx: Context, spec, theta, Y: np.ndarray) -> np.ndarray:
-    """Whitened (n_obs, c) columns of block-level Y (n_blocks, c) under noise ``theta``."""
+def whiten_columns(ctx: Context, spec, theta, Y: np.ndarray | list[np.ndarray]) -> np.ndarray:
+    """Whitened (n_obs, c) columns of block-level Y (n_blocks, c) under noise ``theta`` (or of
+    a list of (n_blocks, k) arrays side by side, never stacked whole)."""
     W, _ = ns.whiten(spec, theta, Y, ctx.grid.mask, ctx.grid.w)
     obs = ctx.grid.mask > 0
     return W if obs.all() else W[obs]
@@ -73,7 +74,7 @@ def whitened_model(ctx: Context, fit: ModelFit, *, n_sims: int, seed: int,
     spec, theta = fit.noise.spec, fit.noise.theta
     sims = nullsim.simulate(spec, theta, 1.0, ctx.grid.w, n_sims, seed=seed)
     more = [] if extra is None else list(extra) if isinstance(extra, list) else [extra]
-    W = whiten_columns(ctx, spec, theta, np.column_stack([ctx.y[:, None], fit.X, sims] + more))
+    W = whiten_columns(ctx, spec, theta, [ctx.y[:, None], fit.X, sims] + more)
     p = fit.X.shape[1]
     Qx, _ = np.linalg.qr(W[:, 1:1 + p])
     r = W[:, 0] - Qx @ (Qx.T @ W[:, 0])

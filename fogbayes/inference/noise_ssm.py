@@ -292,6 +292,17 @@ def _padded_filter(spec: NoiseSpec, theta, Y: np.ndarray, mask, w, minimum: int)
                       jnp.asarray(mask, dtype=float), jnp.asarray(w, dtype=float))
 
 
+def _side_by_side(blocks: list[np.ndarray], j: int, k: int) -> np.ndarray:
+    """Columns ``j:k`` of the blocks placed side by side."""
+    parts, at = [], 0
+    for b in blocks:
+        lo, hi = max(j - at, 0), min(k - at, b.shape[1])
+        if lo < hi:
+            parts.append(b[:, lo:hi])
+        at += b.shape[1]
+    return parts[0] if len(parts) == 1 else np.column_stack(parts)
+
+
 def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
     """:func:`whiten_raw` with the columns zero-padded to a power of four (>= ``minimum``).
 
@@ -300,16 +311,17 @@ def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
     through that width's program a chunk at a time into one output: the columns share the
     gains and are filtered independently, so the values are the same, and the memory is
     the output plus one chunk (a screening whitens thousands of candidate columns).
-    Returns NumPy (V (n, C), F (n,)).
+    ``Y``: an (n, C) array, or a list of (n, k) arrays side by side (then never stacked
+    whole). Returns NumPy (V (n, C), F (n,)).
     """
-    Y = np.asarray(Y, float)
-    c = Y.shape[1]
+    blocks = [np.asarray(b, float) for b in Y] if isinstance(Y, list) else [np.asarray(Y, float)]
+    c = sum(b.shape[1] for b in blocks)
     if c <= MAX_FILTER_COLUMNS:
-        V, F = _padded_filter(spec, theta, Y, mask, w, minimum)
+        V, F = _padded_filter(spec, theta, _side_by_side(blocks, 0, c), mask, w, minimum)
         return np.asarray(V)[:, :c], np.asarray(F)
-    out = np.empty(Y.shape)
+    out = np.empty((blocks[0].shape[0], c))
     for j in range(0, c, MAX_FILTER_COLUMNS):
-        part = Y[:, j:j + MAX_FILTER_COLUMNS]
+        part = _side_by_side(blocks, j, j + MAX_FILTER_COLUMNS)
         V, F = _padded_filter(spec, theta, part, mask, w, minimum)
         out[:, j:j + part.shape[1]] = np.asarray(V)[:, :part.shape[1]]
         del V
@@ -317,7 +329,8 @@ def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
 
 
 def whiten(spec: NoiseSpec, theta, Y, mask, w):
-    """Whitened columns L^-1 Y (n, C): innovations / sqrt(F), 0 at missing blocks."""
+    """Whitened columns L^-1 Y (n, C): innovations / sqrt(F), 0 at missing blocks (``Y`` as
+    in :func:`filter_padded`)."""
     V, F = filter_padded(spec, theta, Y, mask, w)
     scale = (np.asarray(mask) / np.sqrt(F))[:, None]
     if V.flags.writeable:  # a chunked filter's own output: scaled in place
