@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from _pool_fleet import write_units
 from fogbayes.pool.normal import MU_PRIOR_SD, SPREAD_PRIOR_SD, fit_pool, shrink
 
 
@@ -209,40 +210,30 @@ def test_a_datasheet_prior_moves_the_population_median_by_its_weight():
     """A tight sheet (sd 0.01 in log) pins mu near the sheet value; a loose one (sd 3) leaves
     it where the units put it. Same fleet shape as the other tests (one compilation)."""
     y, cov, _ = _fleet(8, [0.0, 1.0], [0.2, 0.3], [0.05, 0.2], seed=7)
-    free = fit_pool(y, cov, ("a", "b"), seed=0)
-    tight = fit_pool(y, cov, ("a", "b"), seed=0, mu_prior=([0.5, 1.0], [0.01, MU_PRIOR_SD]))
-    loose = fit_pool(y, cov, ("a", "b"), seed=0, mu_prior=([0.5, 1.0], [3.0, MU_PRIOR_SD]))
+    # only the population is checked: no leave-one-out (it does not change the mu draws)
+    free = fit_pool(y, cov, ("a", "b"), seed=0, outliers=False)
+    tight = fit_pool(y, cov, ("a", "b"), seed=0, outliers=False,
+                     mu_prior=([0.5, 1.0], [0.01, MU_PRIOR_SD]))
+    loose = fit_pool(y, cov, ("a", "b"), seed=0, outliers=False,
+                     mu_prior=([0.5, 1.0], [3.0, MU_PRIOR_SD]))
     assert abs(np.median(tight.mu[:, 0]) - 0.5) < 0.03
     assert abs(np.median(loose.mu[:, 0]) - np.median(free.mu[:, 0])) < 0.03
     assert abs(np.median(free.mu[:, 0]) - 0.5) > 0.3
 
 
-def _write_units(folder: Path, n_units: int, *, n=2**14, fs=10.0, outlier=None):
-    from fogbayes import Recording, save
-    from fogbayes.data import Metadata
-    from fogbayes.simulate.noise import allan_noise
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory):
+    """Eight simulated units, unit2 with four times the others' N, pooled by the CLI once
+    per run (tests/_pool_fleet.py; tests/test_report_browser.py renders the same report)."""
+    from _pool_fleet import pooled_fleet
 
-    rng = np.random.default_rng(11)
-    folder.mkdir()
-    for u in range(n_units):
-        k = 0.66 * np.exp(0.2 * rng.standard_normal())
-        N = 0.01 * np.exp(0.1 * rng.standard_normal())
-        if u == outlier:
-            N *= 4.0
-        y = allan_noise(4 * n, fs, seed=u, flicker_span=1, Q=0.19, N=N, B=0.165, K=k)[:n]
-        save(Recording(time=np.arange(n) / fs, output=y, unit="deg/h",
-                       meta=Metadata(sensor_id=f"unit{u}", sample_rate=fs)),
-             folder / f"unit{u}.npz")
+    return pooled_fleet(tmp_path_factory)
 
 
-def test_cli_pools_a_folder_writes_document_and_report(tmp_path):
+def test_cli_pools_a_folder_writes_document_and_report(fleet, tmp_path):
     from fogbayes.cli import main
 
-    _write_units(tmp_path / "runs", 8, n=2**13, outlier=2)
-    out, rep = tmp_path / "pool.json", tmp_path / "pool.html"
-    assert main(["--quiet", "pool", str(tmp_path / "runs"), "--terms", "N,B", "--json", str(out),
-                 "--report", str(rep)]) == 0
-    doc = json.loads(out.read_text())
+    doc = json.loads((fleet / "pool.json").read_text())
     assert doc["schema"] == "fogbayes.pool/1" and list(doc["channels"]) == ["output"]
     pool = doc["channels"]["output"]
     assert [u["name"] for u in pool["units"]] == [f"unit{u}" for u in range(8)]
@@ -252,13 +243,13 @@ def test_cli_pools_a_folder_writes_document_and_report(tmp_path):
     assert pool["flagged"] == ["unit2"]
     med = pool["population"]["N"]["median"]
     assert med["low"] < 0.01 < med["high"] * 1.1
-    html = rep.read_text()
+    html = (fleet / "pool.html").read_text()
     assert "Population" in html and "unit2" in html and "data:image/png;base64," in html
     # a datasheet prior (fogbayes prior) on the typical unit's N is recorded and applied
     sheet = tmp_path / "sheet.json"
     assert main(["--quiet", "prior", "--arw", "0.02", "--arw-unit", "deg/sqrt(h)",
                  "--looseness", "1.01", "--json", str(sheet)]) == 0
-    assert main(["--quiet", "pool", str(tmp_path / "runs"), "--terms", "N,B", "--prior",
+    assert main(["--quiet", "pool", str(fleet / "runs"), "--terms", "N,B", "--prior",
                  str(sheet), "--json", str(tmp_path / "p2.json")]) == 0
     p2 = json.loads((tmp_path / "p2.json").read_text())["channels"]["output"]
     assert p2["prior"]["terms"]["N"]["value"] == 0.02 and "N" in p2["prior"]["rule"]
@@ -274,7 +265,7 @@ def test_cli_pools_a_folder_writes_document_and_report(tmp_path):
 def test_cli_refuses_bad_arguments_in_one_line(tmp_path, capsys, args, key):
     from fogbayes.cli import main
 
-    _write_units(tmp_path / "runs", 2, n=2**10)
+    write_units(tmp_path / "runs", 2, n=2**10)
     assert main(["pool", str(tmp_path / "runs"), "--json", str(tmp_path / "p.json"), *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and key in err[0] and "Traceback" not in err[0]
@@ -283,7 +274,7 @@ def test_cli_refuses_bad_arguments_in_one_line(tmp_path, capsys, args, key):
 def test_cli_refuses_a_single_recording_and_an_empty_folder(tmp_path, capsys):
     from fogbayes.cli import main
 
-    _write_units(tmp_path / "runs", 1, n=2**10)
+    write_units(tmp_path / "runs", 1, n=2**10)
     assert main(["pool", str(tmp_path / "runs"), "--json", str(tmp_path / "p.json")]) == 2
     assert "at least two" in capsys.readouterr().err
     (tmp_path / "empty").mkdir()
@@ -296,7 +287,7 @@ def test_cli_refuses_a_constant_unit_in_one_line(tmp_path, capsys):
     from fogbayes.cli import main
     from fogbayes.data import Metadata
 
-    _write_units(tmp_path / "runs", 2, n=2**10)
+    write_units(tmp_path / "runs", 2, n=2**10)
     save(Recording(time=np.arange(1024) / 10.0, output=np.full(1024, 3.0), unit="deg/h",
                    meta=Metadata(sensor_id="stuck", sample_rate=10.0)), tmp_path / "runs" / "z.npz")
     assert main(["pool", str(tmp_path / "runs"), "--json", str(tmp_path / "p.json")]) == 2
@@ -362,8 +353,9 @@ def test_unit_names_stay_apart_across_folders_and_a_file_named_twice_is_refused(
 
 def test_a_unit_is_drawn_with_its_own_covariance_and_the_population_is_unchanged():
     # fogbayes.pool.allan gives the population the units' covariances at the population
-    # median and each unit its own (unit_cov) where it is taken alone: its shrunk draws
-    y, cov, _ = _fleet(10, [0.0, 1.0], [0.2, 0.3], [0.05, 0.1], seed=7)
+    # median and each unit its own (unit_cov) where it is taken alone: its shrunk draws.
+    # Eight units, as the other tests: one compilation of the sampler serves them all
+    y, cov, _ = _fleet(8, [0.0, 1.0], [0.2, 0.3], [0.05, 0.1], seed=7)
     own = cov.copy()
     own[0] *= 16.0  # unit 0 is 4x less precise than the population pass takes it
     a = fit_pool(y, cov, ("a", "b"), seed=3, outliers=False)

@@ -191,25 +191,11 @@ def test_report_dom_has_every_section_with_figures_and_tables(demo_report):
 
 @pytest.fixture(scope="module")
 def pool_report(tmp_path_factory):
-    """A fleet of eight simulated units, one with four times the others' N (as in
-    tests/test_pool.py), pooled by the CLI."""
-    from fogbayes import Recording, save
-    from fogbayes.data import Metadata
-    from fogbayes.simulate.noise import allan_noise
+    """A fleet of eight simulated units, one (unit2) with four times the others' N, pooled
+    by the CLI once per run (tests/_pool_fleet.py; tests/test_pool.py checks its document)."""
+    from _pool_fleet import pooled_fleet
 
-    d = tmp_path_factory.mktemp("pool")
-    rng = np.random.default_rng(11)
-    n, fs = 2**13, 10.0
-    for u in range(8):
-        N = 0.01 * np.exp(0.1 * rng.standard_normal()) * (4.0 if u == 2 else 1.0)
-        K = 0.66 * np.exp(0.2 * rng.standard_normal())
-        y = allan_noise(4 * n, fs, seed=u, flicker_span=1, Q=0.19, N=N, B=0.165, K=K)[:n]
-        save(Recording(time=np.arange(n) / fs, output=y, unit="deg/h",
-                       meta=Metadata(sensor_id=f"FOG-{u:03d}", sample_rate=fs)),
-             d / f"unit{u}.npz")
-    assert main(["--quiet", "pool", *sorted(str(p) for p in d.glob("*.npz")), "--terms", "N,B",
-                 "--json", str(d / "pool.json"), "--report", str(d / "pool.html")]) == 0
-    return d / "pool.html"
+    return pooled_fleet(tmp_path_factory) / "pool.html"
 
 
 def test_pool_report_renders_and_leads_with_the_population(pool_report, tmp_path):
@@ -230,7 +216,7 @@ def test_pool_report_renders_and_leads_with_the_population(pool_report, tmp_path
     head = dom[dom.index(sections[0]):]
     head = head[:head.index("</section>")]
     assert "population median" in head and "a new unit (90 %)" in head
-    assert "Outside the population" in head and "FOG-002" in head  # the planted outlier
+    assert "Outside the population" in head and "unit2" in head  # the planted outlier
     rows = re.findall(r"<tr><td>([NB])</td><td>[^<]*</td><td>([^<]+)</td><td>\[([^,]+), ([^\]]+)\]", head)
     assert [r[0] for r in rows] == ["N", "B"]
     # the simulated population's N is 0.01 (one unit at 4x); its interval must hold it

@@ -131,8 +131,8 @@ def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
     """NUTS chains over (mu, log s, z) (:mod:`fogbayes.inference.nuts`); the unit weights are
     an argument, so the full fit and every leave-one-out refit share one compilation per
     (U, P). The chains run one after another (``lax.map``): vmapped, every chain waits at
-    each step for the deepest tree of the four, and the program takes about three times as
-    long to trace and compile (eight units, two terms: 28 s against 9 s on the 2-core box)."""
+    each step for the deepest tree of the four, and the program is several times slower to
+    trace and compile."""
     from ..inference.nuts import chain_sampler
 
     return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=target,
