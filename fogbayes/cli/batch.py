@@ -12,11 +12,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, INPUT_RATE_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
-                      TEMPERATURE_OPT, TIME_COLUMN_OPT, progress, refuse_overwrite, say,
-                      write_json)
-from ._common import TEMPERATURE_OFFSET_OPT, TEMPERATURE_SCALE_OPT, TIME_UNIT_OPT
-from ._common import added_reading_options, check_inputs
+from ._common import (QUIET_OPT, TIME_UNIT_OPT, check_inputs, load_keywords, progress,
+                      reading_options, refuse_overwrite, say, write_json)
 
 _EPILOG = """Examples:
 
@@ -61,15 +58,7 @@ def batch(
                                 help="Task compensate: apply this fit or loop document to "
                                      "every recording instead of fitting each."),
     json_out: str = typer.Option(None, "--json", help="Also write the summary here ('-' = stdout)."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
-    input_rate: str = INPUT_RATE_OPT,
-    temperature_scale: float = TEMPERATURE_SCALE_OPT,
-    temperature_offset: float = TEMPERATURE_OFFSET_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Fit, compensate, loop or report every recording of a folder, in-process or on Dask.
@@ -81,19 +70,16 @@ def batch(
     from .fit import parse_option_pairs
 
     # the keywords of fogbayes.data.load, as load_recording passes them (every file alike)
-    load = {"time": time_column, "output": column, "unit": output_unit,
-            "scale_factor": scale_factor, "temperature": temperature or None,
-            "input_rate": input_rate, "time_unit": time_unit,
-            "temperature_scale": temperature_scale, "temperature_offset": temperature_offset,
-            **added_reading_options()}
+    given = {**reading_options(), "time_unit": time_unit}
+    load = load_keywords(given)
     from ..data.checks import finite, time_divisor
 
     if time_unit is not None:
         time_divisor(time_unit)  # bad reading options: exit 2 now, not one failure per file
-    finite(temperature_scale, "--temperature-scale", nonzero=True)
-    finite(temperature_offset, "--temperature-offset")
-    if scale_factor is not None:
-        finite(scale_factor, "--scale-factor", positive=True)
+    finite(given["temperature_scale"], "--temperature-scale", nonzero=True)
+    finite(given["temperature_offset"], "--temperature-offset")
+    if given["scale_factor"] is not None:
+        finite(given["scale_factor"], "--scale-factor", positive=True)
     opts = JobOptions(orders=orders, seed=seed, fit_options=parse_option_pairs(option),
                       load=load, bayes=bayes, max_steps=max_steps, alpha=alpha,
                       params=_calibration(params, task, model, vectorize))

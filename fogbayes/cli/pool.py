@@ -7,9 +7,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (AXIS_OPT, COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
-                      TEMPERATURE_OPT, TIME_COLUMN_OPT, TIME_UNIT_OPT, channels, load_recording,
-                      progress, refuse_overwrite, say, write_json)
+from ._common import (QUIET_OPT, TIME_UNIT_OPT, channels, load_recording, progress,
+                      reading_options, refuse_overwrite, say, write_json)
 
 _MODELS = ("allan", "bias-t")
 
@@ -79,13 +78,7 @@ def pool(
     seed: int = typer.Option(0, help="Seed of the sampler."),
     prior: Path = typer.Option(None, "--prior", help="Datasheet prior (from 'fogbayes "
                                "prior'): where the typical unit's terms lie, how loosely."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    axis: str = AXIS_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Pool the noise (or the bias law) of several runs or units of one sensor type.
@@ -141,12 +134,11 @@ def pool(
         raise ArgumentError(f"a population needs at least two recordings, got {len(files)}",
                             column="PATHS", fix="name two or more runs or units")
     pools = {}
+    axis, column = (reading_options()[k] for k in ("axis", "column"))
     for name, pick in channels(axis, column):
         recs, units = [], []
         for f in files:
-            recs.append(load_recording(f, time_column=time_column, time_unit=time_unit,
-                                       output_unit=output_unit, scale_factor=scale_factor,
-                                       temperature=temperature, **pick))
+            recs.append(load_recording(f, time_unit=time_unit, **pick))
         names = _names(recs, files)
         for f, rec, unit_name in zip(files, recs, names):
             with progress(f"{'bias law' if model == 'bias-t' else 'Allan fit'} of {unit_name}"
