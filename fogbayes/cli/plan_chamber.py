@@ -15,9 +15,8 @@ from pathlib import Path
 import typer
 
 from ._app import app
-from ._common import (COLUMN_OPT, OUTPUT_UNIT_OPT, QUIET_OPT, SCALE_FACTOR_OPT,
-                      TEMPERATURE_OPT, TIME_COLUMN_OPT, TIME_UNIT_OPT, load_recording,
-                      progress, refuse_overwrite, say, write_json)
+from ._common import (QUIET_OPT, TIME_UNIT_OPT, load_recording, progress, refuse_overwrite,
+                      say, write_json)
 
 
 def _floats(text: str, flag: str, n: int | None = None) -> list[float]:
@@ -108,12 +107,7 @@ def plan_chamber(
                                    "segments) as the baseline; default the generic test.",
                                    show_default=False),
     json_out: str = typer.Option(None, "--json", help="Also write the plan ('-' = stdout)."),
-    column: str = COLUMN_OPT,
-    time_column: str = TIME_COLUMN_OPT,
     time_unit: str = TIME_UNIT_OPT,
-    temperature: list[str] = TEMPERATURE_OPT,
-    output_unit: str = OUTPUT_UNIT_OPT,
-    scale_factor: float = SCALE_FACTOR_OPT,
     quiet: bool = QUIET_OPT,
 ):
     """Which chamber programme separates a thermal lag from the channel gradient (and both
@@ -154,9 +148,7 @@ def plan_chamber(
     baseline = None if programme is None else _segments_file(programme)
     with progress("Fitting the noise model and scoring programmes"):
         if pilot is not None:
-            rec = load_recording(pilot, column=column, time_column=time_column,
-                                 time_unit=time_unit, temperature=temperature,
-                                 output_unit=output_unit, scale_factor=scale_factor)
+            rec = load_recording(pilot, time_unit=time_unit)
             nz, dur, rate = noise_for_plan(rec, lags=lag_s, room=room)
             source = str(pilot)
         else:
