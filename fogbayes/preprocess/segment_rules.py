@@ -88,18 +88,17 @@ def stats_row(T, t, start, stop, count, mean, slope):
         slope[k] = sxy / sxx
 
 
-def merge_runs(rates, threshold, t, end, min_duration, row=merge_row, count=count_runs):
+def merge_runs(rates, threshold, t, end, min_duration):
     """Merged runs of the labels of every row of rates (S, n): lab, start, stop (S, R) and
-    count (S,) (R: the most runs of any row before merging). ``row``/``count``: the rules
-    to run (these, or :mod:`.segment_loops`' compiled ones)."""
+    count (S,) (R: the most runs of any row before merging)."""
     S = rates.shape[0]
     threshold, min_duration = float(threshold), float(min_duration)
-    R = max(count(rates[s], threshold) for s in range(S))
+    R = max(count_runs(rates[s], threshold) for s in range(S))
     lab = np.zeros((S, R), np.int64)
     start = np.zeros((S, R), np.int64)
     stop = np.zeros((S, R), np.int64)
-    n = np.array([row(rates[s], threshold, t, end, min_duration, lab[s], start[s], stop[s])
-                  for s in range(S)], np.int64)
+    n = np.array([merge_row(rates[s], threshold, t, end, min_duration, lab[s], start[s],
+                            stop[s]) for s in range(S)], np.int64)
     return lab, start, stop, n
 
 
