@@ -1,4 +1,4 @@
-"""Expected log predictive density (PSIS-LOO, WAIC by ArviZ) of a fitted model.
+"""Expected log predictive density (PSIS-LOO, WAIC) of a fitted model.
 
 Pointwise: log N(v_t(beta_s); 0, s2 F_t), the Kalman one-step-ahead predictive of the block
 means, beta_s ~ N(beta_hat, s2 S_XX^-1), noise at ML. Criteria as
@@ -40,8 +40,8 @@ def criteria(ctx: Context, fit: ModelFit, *, n_draws: int = 100, seed: int = 0,
     key = (id(fit.noise), seed)
     if cache is not None and key in cache:
         return cache[key][1]
-    idata = ic.loglik_idata(pointwise(ctx, fit, n_draws=n_draws, seed=seed))
-    out = ic.information(idata, "loo"), ic.information(idata, "waic")
+    ll = np.asarray(pointwise(ctx, fit, n_draws=n_draws, seed=seed), float)
+    out = ic.information(ll, "loo"), ic.information(ll, "waic")
     if cache is not None:
         cache[key] = (fit, out)  # keep fit alive so its id is not reused
     return out

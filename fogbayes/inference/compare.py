@@ -1,8 +1,10 @@
 """Model and order comparison: paper 000's RMS criterion, WAIC and PSIS-LOO.
 
 RMS criterion (paper 000 eq. 11): sigma_d = sqrt(sum (k - k_hat)^2 / (n - n_params)), smallest
-wins (assumes independent residuals). WAIC and LOO by ArviZ (``az.waic``, ``az.loo``), called
-only here: :func:`information` of a pointwise log-likelihood (:func:`loglik_idata`),
+wins (assumes independent residuals). WAIC and PSIS-LOO: :func:`information` of a pointwise
+log-likelihood -- an array of independent draws by :mod:`fogbayes.stats.psis` (ArviZ's
+arithmetic without its import), chains in an InferenceData (:func:`loglik_idata`) by ArviZ
+(``az.loo``, ``az.waic``, called only here: its relative efficiency needs the chains);
 :func:`difference` of two fits with its standard error, :func:`compare` ranking by elpd.
 """
 
@@ -55,7 +57,7 @@ class IC(NamedTuple):
     pointwise: np.ndarray   # elpd_i per observation
     pareto_k_max: float     # worst PSIS shape estimate (NaN for WAIC)
     warning: bool           # ArviZ's warning (large k / WAIC variance > 0.4), not printed
-    data: object            # the ArviZ ELPDData (what ``az.compare`` takes)
+    data: object            # the ArviZ ELPDData (what ``az.compare`` takes); None from an array
 
 
 def loglik_idata(log_lik, *, name: str = "y", posterior: Mapping | None = None):
@@ -73,10 +75,19 @@ def loglik_idata(log_lik, *, name: str = "y", posterior: Mapping | None = None):
 
 
 def information(idata, kind: str = "loo") -> IC:
-    """PSIS-LOO (``kind="loo"``) or WAIC of ``idata``'s log-likelihood group, pointwise.
+    """PSIS-LOO (``kind="loo"``) or WAIC, pointwise, of ``idata``'s log-likelihood group or
+    of an array (draws, n) of independent draws (module doc).
 
     The one place fogbayes calls ``az.loo`` / ``az.waic``; their warnings are returned in
     ``warning`` (and the Pareto k), never printed."""
+    if isinstance(idata, np.ndarray):
+        from ..stats import psis
+
+        if kind not in ("loo", "waic"):
+            raise ValueError(f"unknown information criterion {kind!r}: use 'loo' or 'waic'")
+        c = psis.loo(idata) if kind == "loo" else psis.waic(idata)
+        k_max = float(np.max(c.pareto_k)) if kind == "loo" else float("nan")
+        return IC(kind, c.elpd, c.se, c.p, c.pointwise, k_max, c.warning, None)
     import arviz as az
 
     with warnings.catch_warnings():
