@@ -14,6 +14,8 @@ import warnings
 import numpy as np
 import pytest
 
+import arviz
+
 from fogbayes.inference.compare import information, loglik_idata
 from fogbayes.stats import psis
 
@@ -52,6 +54,26 @@ def test_loo_and_waic_are_arviz_arithmetic(case, ll):
     k_az = np.asarray(ref["loo"].data.pareto_k)
     np.testing.assert_array_equal(np.isfinite(k), np.isfinite(k_az))
     np.testing.assert_allclose(k[np.isfinite(k)], k_az[np.isfinite(k_az)], rtol=1e-11, atol=1e-12)
+
+
+@pytest.mark.parametrize("case, ll", list(_records())[:12], ids=lambda v: str(v) if isinstance(
+    v, int) else "")
+def test_smoothed_weights_are_arviz_psislw_in_the_original_order(case, ll):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ref_w, ref_k = (np.asarray(a) for a in arviz.psislw(-ll.T))
+    w, k = psis.psislw(-ll.T)
+    np.testing.assert_array_equal(np.isfinite(k), np.isfinite(ref_k))
+    np.testing.assert_allclose(k[np.isfinite(k)], ref_k[np.isfinite(ref_k)], rtol=1e-11,
+                               atol=1e-12)
+    # tied ratios share their smoothed weights in whichever order a sort leaves them (ArviZ's
+    # own order of ties is its sort's): the weights of each row as a set, and in place on
+    # rows without ties
+    np.testing.assert_allclose(np.sort(w, axis=1), np.sort(ref_w, axis=1), rtol=1e-11,
+                               atol=1e-11)
+    untied = np.array([np.unique(r).size == r.size for r in -ll.T])
+    assert untied.sum() >= 0.5 * untied.size
+    np.testing.assert_allclose(w[untied], ref_w[untied], rtol=1e-11, atol=1e-11)
 
 
 def test_the_records_reach_every_path():

@@ -271,13 +271,12 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
     censored components keep ``cov``'s width.
 
     Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
-    ArviZ); a unit whose Pareto k exceeds PARETO_K_MAX or whose p-value lies within
-    REFIT_FACTOR x ``flag_level`` is refitted exactly without it (the same compiled sampler
-    with its weight set to 0), so a flag never rests on the approximation.
+    :func:`fogbayes.stats.psis.psislw`); a unit whose Pareto k exceeds PARETO_K_MAX or whose
+    p-value lies within REFIT_FACTOR x ``flag_level`` is refitted exactly without it (the
+    same compiled sampler with its weight set to 0), so a flag never rests on the
+    approximation.
     """
-    import warnings
-
-    import arviz as az
+    from ..stats.psis import psislw
 
     y = np.asarray(y, dtype=float)
     cov = np.asarray(cov, dtype=float)
@@ -325,10 +324,7 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
                           diagnostics)
     # leave-one-out on the joint posterior of (mu, s, theta): the ratio 1 / p(y_u | ...)
     ll = _log_lik_table(y, cov, cens, ceil, mu, spread, theta)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # ArviZ warns on k > 0.7: handled by refitting
-        log_w, k_hat = az.psislw(-ll.T)  # (U, D) log ratios 1 / p(y_u | draw)
-    log_w, k_hat = np.asarray(log_w), np.asarray(k_hat)
+    log_w, k_hat = psislw(-ll.T)  # (U, D) log ratios 1 / p(y_u | draw); k > 0.7: refitted
     outlier_p, method = np.empty(U), []
     refits = []
     for u in range(U):

@@ -1,14 +1,15 @@
-"""PSIS-LOO and WAIC of a pointwise log-likelihood from one chain of draws, without ArviZ.
+"""PSIS-LOO, WAIC and PSIS weights of a pointwise log-likelihood of independent draws.
 
 ll (S draws, n observations). WAIC: lppd_i = log mean_s exp(ll_si), v_i = var_s ll_si,
-elpd_i = lppd_i - v_i (Watanabe 2010). PSIS-LOO (Vehtari, Gelman & Gabry 2017; Vehtari et al.
-2024): raw log weights -ll_i, the largest M = ceil(min(S/5, 3 sqrt(S))) replaced by the
-expected order statistics of a generalised Pareto fitted to them (Zhang & Stephens 2009, with
-ArviZ's weakly informative prior on k), capped at the largest raw weight; elpd_i = log sum_s
-w_si exp(ll_si), w normalised. Relative efficiency 1 (independent draws). The same arithmetic
-as ``az.loo`` / ``az.waic`` (ArviZ 0.23, ``scale="log"``; tests/test_psis.py checks it to
-1e-10), vectorised over observations: ArviZ's import (~200 MB, ~1.3 s) and its per-observation
-Python loop cost more than the loop's whole ELPD.
+elpd_i = lppd_i - v_i (Watanabe 2010). PSIS (Vehtari, Gelman & Gabry 2017; Vehtari et al.
+2024): of raw log ratios r_i (-ll_i for LOO), the largest M = ceil(min(S/5, 3 sqrt(S))) are
+replaced by the expected order statistics of a generalised Pareto fitted to them (Zhang &
+Stephens 2009, with ArviZ's weakly informative prior on k), capped at the largest raw ratio;
+LOO: elpd_i = log sum_s w_si exp(ll_si), w normalised. Relative efficiency 1 (independent
+draws). The same arithmetic as ``az.loo`` / ``az.waic`` / ``az.psislw`` (ArviZ 0.23,
+``scale="log"``; tests/test_psis.py checks it to 1e-11), vectorised over observations:
+ArviZ's import (~200 MB, ~1.3 s) and its per-observation Python loop cost more than the
+loop's whole ELPD.
 """
 
 from __future__ import annotations
@@ -100,11 +101,11 @@ def _tail_length(S: int) -> int:
     return int(np.ceil(min(S / 5.0, 3 * np.sqrt(S))))
 
 
-def loo(ll: np.ndarray) -> Criterion:
-    """PSIS-LOO (``log`` scale) of ``ll`` (S, n) (module doc)."""
-    ll = np.asarray(ll, float)
-    S = ll.shape[0]
-    lw, lt = -ll.T, ll.T  # rows: observations
+def psislw(log_ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pareto-smoothed, normalised log importance weights of each row of ``log_ratios``
+    (n, S) and each row's Pareto k: ``az.psislw(log_ratios)`` at relative efficiency 1."""
+    lw = np.asarray(log_ratios, float)
+    S = lw.shape[1]
     order = np.argsort(lw, axis=1)
     x = np.take_along_axis(lw, order, axis=1)
     x -= x[:, -1:]
@@ -120,8 +121,18 @@ def loo(ll: np.ndarray) -> Criterion:
     for j in np.flatnonzero(~regular):
         wj, kj = _smoothed_rows(x[j][None], int(n_tail[j]))
         w[j], k[j] = wj[0], kj[0]
-    i = _logsumexp(w + np.take_along_axis(lt, order, axis=1), axis=1)
-    lppd = float(np.sum(_logsumexp(lt, axis=1) - np.log(S)))
+    out = np.empty_like(w)
+    np.put_along_axis(out, order, w, axis=1)
+    return out, k
+
+
+def loo(ll: np.ndarray) -> Criterion:
+    """PSIS-LOO (``log`` scale) of ``ll`` (S, n) (module doc)."""
+    ll = np.asarray(ll, float)
+    S = ll.shape[0]
+    w, k = psislw(-ll.T)  # rows: observations
+    i = _logsumexp(w + ll.T, axis=1)
+    lppd = float(np.sum(_logsumexp(ll.T, axis=1) - np.log(S)))
     good_k = min(1 - 1 / np.log10(S), 0.7)
     return Criterion(float(i.sum()), float(np.sqrt(i.size * np.var(i))), lppd - float(i.sum()),
                      i, k, bool(np.any(k > good_k)))
