@@ -177,6 +177,34 @@ def test_all_or_none_renames_every_file_at_the_end_or_none(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
 
 
+@pytest.mark.parametrize("fail_at", [0, 1])
+def test_a_signal_during_the_renames_leaves_no_temporary(tmp_path, monkeypatch, fail_at):
+    """SIGTERM (here its exception) landing while all_or_none renames its files, before the
+    first rename or between two: the files renamed stay (complete), every other temporary
+    is removed, and the other final names are untouched."""
+    from fogbayes.data import atomic
+    from fogbayes.data.atomic import all_or_none
+
+    a, b = tmp_path / "a.txt", tmp_path / "b.txt"
+    b.write_text("old")
+    real, calls = atomic._rename, []
+
+    def rename(tmp, path):
+        calls.append(path)
+        if len(calls) - 1 == fail_at:
+            raise SystemExit(143)
+        real(tmp, path)
+
+    monkeypatch.setattr(atomic, "_rename", rename)
+    with pytest.raises(SystemExit):
+        with all_or_none():
+            write_text(a, "A")
+            write_text(b, "B")
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["a.txt", "b.txt"] if fail_at else
+                                                         ["b.txt"])
+    assert b.read_text() == "old" and (not fail_at or a.read_text() == "A")
+
+
 def test_a_write_refused_by_the_folder_names_the_users_path(read_only):
     """Inside the writer (no check before): the message names c.csv, not .c.tmp-...csv."""
     with pytest.raises(FogbayesError) as info:

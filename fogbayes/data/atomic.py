@@ -168,24 +168,23 @@ def all_or_none() -> Iterator[None]:
     if _BATCH["files"] is not None:
         yield
         return
-    _BATCH["files"] = []
+    _BATCH["files"] = files = []
+    renamed = 0  # the temporaries before this one are in place; the rest are removed on failure
     try:
         yield
         if _STOP["code"] is not None:
             raise Stopped(_STOP["code"])
-        files = _BATCH["files"]
         _BATCH["files"] = None
-        for k, (tmp, path) in enumerate(files):
+        for tmp, path in files:
             try:
                 _rename(tmp, path)
             except OSError as exc:
-                for left, _ in files[k:]:
-                    _remove(left)
                 raise unwritable(path, exc) from None
+            renamed += 1
         for folder in {path.parent for _, path in files}:
             _fsync_dir(folder)
-    except BaseException:
-        for tmp, _ in _BATCH["files"] or []:
+    except BaseException:  # a signal between two renames included
+        for tmp, _ in files[renamed:]:
             _remove(tmp)
         raise
     finally:
