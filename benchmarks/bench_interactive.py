@@ -13,7 +13,7 @@ CSV; best of ``--repeat`` calls):
 Cold is one call with an empty cache folder (``FOGBAYES_CACHE_DIR``, JAX programs and Numba
 loops); warm is the best of ``--repeat`` calls after that call filled the folder. The peak
 resident memory (``getrusage`` of the child) of ``fogbayes loop`` on the demo's 6.3 h,
-10 Hz record is measured in a process of its own (warm folder of the loop row). The load
+10 Hz record is measured in a process of its own, with an empty cache folder. The load
 average at the start and end is printed: on a busy machine the ratios are upper bounds.
 
 Run: ``python benchmarks/bench_interactive.py [--repeat 2] [--no-memory] [--only NAME,...]``.
