@@ -27,7 +27,7 @@ except ImportError:  # pragma: no cover - typer on the click package
     from click.exceptions import UsageError as _UsageError
     from click.utils import PacifyFlushWrapper as _PacifyFlushWrapper
 
-from ..data.atomic import Stopped, clear_stop
+from ..data.atomic import Stopped, clear_stop, remove_orphans
 from ..errors import FogbayesError
 from . import _common
 from ._app import app
@@ -144,6 +144,7 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr)
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     finally:
+        remove_orphans()  # temporaries whose writer never got to clean up (a signal)
         clear_stop()
         if installed:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)

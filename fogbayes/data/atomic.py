@@ -52,6 +52,14 @@ def temp_path(path: str | Path) -> Path:
                           f"{path.suffix}")
 
 
+def new_temp(path: str | Path) -> Path:
+    """:func:`temp_path`, registered for :func:`remove_orphans` until it is renamed into
+    place or removed (a name renamed away by other means is a no-op there)."""
+    tmp = temp_path(path)
+    _LIVE.add(tmp)
+    return tmp
+
+
 def final_path(path: str | Path) -> Path:
     """The path a temporary name of :func:`temp_path` stands for (``.c.tmp-12-ab.csv`` ->
     ``c.csv``, in the same folder); any other path unchanged. For messages: the user named
@@ -89,6 +97,19 @@ def _fsync_dir(folder: Path) -> None:
         os.close(fd)
 
 
+#: Temporaries of :func:`new_temp` not yet renamed into place nor removed.
+_LIVE: set = set()
+
+
+def remove_orphans() -> None:
+    """Remove every temporary of :func:`new_temp` still pending (files and folders; never a
+    replaced folder set aside). The CLI calls it as a command ends: a signal can land in a
+    context manager's own frames, before the writer is resumed to clean up, and would leave
+    its temporary behind."""
+    for tmp in list(_LIVE):
+        _remove(tmp)
+
+
 def _remove(path: Path) -> None:
     try:
         if path.is_dir() and not path.is_symlink():
@@ -99,6 +120,7 @@ def _remove(path: Path) -> None:
         pass
     except OSError:
         pass  # best effort: the final name is untouched either way
+    _LIVE.discard(path)
 
 
 @contextmanager
@@ -124,7 +146,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise unwritable(path, exc) from None
-    tmp = temp_path(path)
+    tmp = new_temp(path)
     try:
         yield tmp
         if not tmp.is_file():
@@ -151,6 +173,7 @@ def _rename(tmp: Path, path: Path) -> None:
     if path.is_file():  # keep the permissions of the file replaced
         shutil.copymode(path, tmp)
     os.replace(tmp, path)
+    _LIVE.discard(tmp)
 
 
 #: The files written inside :func:`all_or_none`, (temporary, final) in order; None outside.
@@ -229,7 +252,7 @@ def check_writable(path: str | Path, *, folder: bool = False) -> None:
         where = where.parent
     if not where.is_dir():
         raise unwritable(path, NotADirectoryError(20, "Not a directory"))
-    probe = temp_path(where / path.name)
+    probe = new_temp(where / path.name)
     try:
         fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
     except OSError as exc:
@@ -296,7 +319,7 @@ def atomic_dir(path: str | Path) -> Iterator[Path]:
     """
     path = Path(path)
     check_replaceable_dir(path)
-    tmp = temp_path(path)
+    tmp = new_temp(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp.mkdir()

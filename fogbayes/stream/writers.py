@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data.atomic import _fsync, _fsync_dir, _remove, atomic_dir, check_replaceable_dir, temp_path
+from ..data.atomic import _fsync, _fsync_dir, _remove, atomic_dir, check_replaceable_dir, new_temp
 from ..errors import FileFormatError
 
 
@@ -57,7 +57,7 @@ class Sink:
             self._dir = self._atomic.__enter__()
         else:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._tmp = temp_path(self.path)
+            self._tmp = new_temp(self.path)
         try:
             if kind == "parquet":
                 from ..support.extras import PARQUET, require
@@ -71,7 +71,7 @@ class Sink:
                 self._schema = schema
             else:
                 if kind == "npz":
-                    self._dir = temp_path(Path(str(self.path) + ".parts"))
+                    self._dir = new_temp(Path(str(self.path) + ".parts"))
                     self._dir.mkdir()
                 for nm, dt in self.columns.items():
                     self._w[nm] = NpyWriter(self._dir / f"{nm}.npy", n, dt)
