@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from scipy.special import logsumexp as _logsumexp
 
 _TINY_LOG = float(np.log(np.finfo(float).tiny))
 _EPS = float(np.finfo(float).eps)
@@ -29,11 +30,6 @@ class Criterion(NamedTuple):
     pointwise: np.ndarray
     pareto_k: np.ndarray   # per observation (NaN for WAIC)
     warning: bool          # ArviZ's: some k > min(1 - 1/log10 S, 0.7); WAIC: some v_i > 0.4
-
-
-def _logsumexp(a: np.ndarray, axis: int = -1) -> np.ndarray:
-    m = np.max(a, axis=axis, keepdims=True)
-    return np.log(np.sum(np.exp(a - m), axis=axis)) + np.squeeze(m, axis=axis)
 
 
 def waic(ll: np.ndarray) -> Criterion:
@@ -75,10 +71,10 @@ def _gpd_quantiles(p: np.ndarray, k: np.ndarray, sigma: np.ndarray) -> np.ndarra
     return np.where(sigma > 0, q * sigma, np.nan)
 
 
-def _smoothed_rows(lw: np.ndarray, m_tail: int) -> tuple[np.ndarray, np.ndarray]:
-    """Normalised PSIS log weights of each row of ``lw`` (r, S), sorted ascending, and k."""
-    x = lw - lw.max(axis=1, keepdims=True)
-    x.sort(axis=1)
+def _smoothed_rows(x: np.ndarray, m_tail: int) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised PSIS log weights and k of each row of ``x`` (r, S): log ratios sorted
+    ascending, each row's largest 0 (a copy is smoothed)."""
+    x = np.array(x, float)
     S = x.shape[1]
     cut = np.maximum(x[:, S - m_tail - 1], _TINY_LOG)
     k = np.full(x.shape[0], np.inf)
