@@ -27,7 +27,7 @@ except ImportError:  # pragma: no cover - typer on the click package
     from click.exceptions import UsageError as _UsageError
     from click.utils import PacifyFlushWrapper as _PacifyFlushWrapper
 
-from ..data.atomic import Stopped, clear_stop, remove_orphans
+from ..data.atomic import Stopped, clear_stop, remove_orphans, watch_signals
 from ..errors import FogbayesError
 from . import _common
 from ._app import app
@@ -99,10 +99,11 @@ def _show_help(exc) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``fogbayes`` script; returns the exit code."""
-    installed, previous, previous_int = False, None, None
+    installed, previous, previous_int, unwatch = False, None, None, None
     if threading.current_thread() is threading.main_thread():
         previous, installed = signal.signal(signal.SIGTERM, _terminated), True
         previous_int = signal.signal(signal.SIGINT, _interrupted)
+        unwatch = watch_signals()  # a stop is seen before a rename even if the handler waits
     try:
         # not standalone: a usage error is ours to print, in one line (_usage_line)
         code = app(args=argv, prog_name="fogbayes", standalone_mode=False)
@@ -145,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     finally:
         remove_orphans()  # temporaries whose writer never got to clean up (a signal)
+        if unwatch is not None:
+            unwatch()
         clear_stop()
         if installed:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)

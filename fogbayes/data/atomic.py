@@ -13,7 +13,7 @@ import os
 import re
 import secrets
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -29,6 +29,9 @@ class Stopped(SystemExit):
 
 #: Exit code of a stop requested by a signal handler (:func:`request_stop`), else None.
 _STOP: dict = {"code": None}
+#: Read end of the pipe the C-level signal handler writes each signal's number to
+#: (:func:`watch_signals`), else None.
+_WAKE: dict = {"read": None}
 
 
 def request_stop(code: int) -> None:
@@ -43,6 +46,51 @@ def request_stop(code: int) -> None:
 
 def clear_stop() -> None:
     _STOP["code"] = None
+
+
+def watch_signals() -> Callable[[], None]:
+    """Have the interpreter's C-level handler note every signal in a pipe that
+    :func:`stop_requested` reads; returns the function that undoes it. Main thread only.
+
+    The third line, for a Python handler that has not run yet: CPython 3.11 runs it only
+    when the main thread next checks its eval breaker, and a thread of a C library that
+    takes the GIL can clear that breaker, so the handler can wait until the work is done
+    (seen in CI: a batch killed while writing wrote its summary, then exited 143). The C
+    handler writes the pipe at once, in whatever thread the signal landed.
+    """
+    import signal
+
+    read, write = os.pipe()
+    os.set_blocking(read, False)
+    os.set_blocking(write, False)
+    previous = signal.set_wakeup_fd(write, warn_on_full_buffer=False)
+    _WAKE["read"] = read
+
+    def undo() -> None:
+        signal.set_wakeup_fd(previous)
+        _WAKE["read"] = None
+        os.close(read)
+        os.close(write)
+
+    return undo
+
+
+def stop_requested() -> int | None:
+    """The exit code of a stop requested by SIGTERM (143) or SIGINT (130), else None: the
+    flag of :func:`request_stop`, or a signal noted in the pipe of :func:`watch_signals`
+    whose Python handler has not run yet."""
+    import signal
+
+    if _STOP["code"] is None and _WAKE["read"] is not None:
+        try:
+            noted = os.read(_WAKE["read"], 4096)
+        except (BlockingIOError, OSError):
+            noted = b""
+        for signum in noted:
+            if signum in (signal.SIGTERM, signal.SIGINT):
+                request_stop(128 + signum)
+                break
+    return _STOP["code"]
 
 
 def temp_path(path: str | Path) -> Path:
@@ -152,7 +200,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         if not tmp.is_file():
             raise FileFormatError("the writer left no file", file=str(path))
         _fsync(tmp)
-        if _STOP["code"] is not None:  # stopped while writing: never rename a doubtful file
+        if stop_requested() is not None:  # stopped while writing: never rename a doubtful file
             raise Stopped(_STOP["code"])
         if _BATCH["files"] is not None:  # inside all_or_none(): renamed when it ends
             _BATCH["files"].append((tmp, path))
@@ -195,7 +243,7 @@ def all_or_none() -> Iterator[None]:
     renamed = 0  # the temporaries before this one are in place; the rest are removed on failure
     try:
         yield
-        if _STOP["code"] is not None:
+        if stop_requested() is not None:
             raise Stopped(_STOP["code"])
         _BATCH["files"] = None
         for tmp, path in files:
@@ -332,6 +380,8 @@ def atomic_dir(path: str | Path) -> Iterator[Path]:
             if f.is_file():
                 _fsync(f)
         _fsync_dir(tmp)
+        if stop_requested() is not None:
+            raise Stopped(_STOP["code"])
         check_replaceable_dir(path)  # still ours to replace?
         if path.exists():
             old = temp_path(path.with_name(path.name + ".old"))
