@@ -9,7 +9,8 @@ Kalman one-step-ahead densities. ``converged``: :mod:`fogbayes.inference.converg
 
 from __future__ import annotations
 
-from functools import lru_cache
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
 from typing import NamedTuple
 
 import jax
@@ -23,6 +24,7 @@ from ..errors import FogbayesError
 from ..models.arma import arma_loglik, pacf_to_ar
 from ..models.buckets import bucket_length
 from ..models.statespace import arma_state_space, kalman_filter
+from ..stats.mcmc import ess_bulk, ess_mean, ess_tail, over_elements, rhat_rank
 from ..support.programs import program
 
 
@@ -34,27 +36,47 @@ class Convergence(NamedTuple):
     converged: bool
 
 
-class BayesFit(NamedTuple):
+@dataclass(frozen=True)
+class BayesFit:
     """Posterior summary of ``beta`` (in the units of ``y`` and the basis of ``X``).
 
     For a batch (:func:`fit_linear_bayes_batch`) every array has a leading sensor axis and
     ``convergence`` is a list, one per sensor (divergences are counted for the whole run).
 
-    idata: ArviZ InferenceData (posterior: beta, sigma, phi, theta in y units; log_likelihood
-        "y" pointwise when asked; sample_stats: diverging).
+    groups: the draws as arrays, ``{"posterior": {beta, sigma, phi, theta} (chain, draw,
+        ...) in y units, "sample_stats": {"diverging"}, "observed_data": {"y"},
+        "log_likelihood": {"y"} pointwise when asked}``.
+    idata: the same as an ArviZ InferenceData, built when first asked for (ArviZ's import
+        and the xarray objects cost more than a small posterior's sampling).
     mean, sd: (p,) posterior mean and standard deviation of beta.
     interval: (p, 2) central ``level`` credible interval of beta.
     noise: posterior means {"sigma", "phi", "theta"} (sigma in y units).
     convergence: :class:`Convergence`.
     """
 
-    idata: object
+    groups: dict
     mean: np.ndarray
     sd: np.ndarray
     interval: np.ndarray
     level: float
     noise: dict
     convergence: object
+
+    @cached_property
+    def idata(self):
+        import arviz as az
+
+        return az.from_dict(**self.groups)
+
+    def relative_efficiency(self) -> float:
+        """ArviZ's LOO efficiency of chains: the mean ESS ("mean") of every posterior
+        component over the number of draws (1 for one chain)."""
+        post = self.groups["posterior"]
+        first = next(iter(post.values()))
+        if first.shape[0] == 1:
+            return 1.0
+        ess = np.concatenate([np.ravel(over_elements(ess_mean, v)) for v in post.values()])
+        return float(ess.mean() / (first.shape[0] * first.shape[1]))
 
 
 def _log1m_tanh2(u):
@@ -142,18 +164,19 @@ def _pointwise(beta, sigma, phi, theta, X, y, n_valid):
     return -0.5 * (jnp.log(2 * jnp.pi * f.innov_var) + f.innov**2 / f.innov_var)
 
 
-def convergence_of(idata, var_names, num_chains: int) -> list[Convergence]:
-    """Per-sensor convergence (the posterior's third axis is the sensor)."""
-    import arviz as az
+def convergence_of(post: dict, diverging, num_chains: int) -> list[Convergence]:
+    """Per-sensor convergence of the draws ``post`` {name: (chain, draw, K, ...)}: the worst
+    rank-normalised R-hat, bulk and tail ESS over each sensor's components
+    (:mod:`fogbayes.stats.mcmc`, ArviZ's arithmetic)."""
+    def per_sensor(fn, worst):
+        parts = [over_elements(fn, v) for v in post.values()]  # (K, ...) each
+        return worst(np.concatenate([a.reshape(a.shape[0], -1) for a in parts], axis=1),
+                     axis=1)
 
-    def per_sensor(ds, fn):
-        arrs = [np.asarray(ds[v]).reshape(np.asarray(ds[v]).shape[0], -1) for v in ds.data_vars]
-        return fn(np.concatenate(arrs, axis=1), axis=1)
-
-    rhat = per_sensor(az.rhat(idata, var_names=var_names), np.max)
-    ess_b = per_sensor(az.ess(idata, var_names=var_names, method="bulk"), np.min)
-    ess_t = per_sensor(az.ess(idata, var_names=var_names, method="tail"), np.min)
-    div = int(np.asarray(idata.sample_stats["diverging"]).sum())
+    rhat = per_sensor(rhat_rank, np.max)
+    ess_b = per_sensor(ess_bulk, np.min)
+    ess_t = per_sensor(ess_tail, np.min)
+    div = int(np.asarray(diverging).sum())
     return [Convergence(float(r), float(eb), float(et), div,
                         converged(r, eb, div, floor=ess_floor(num_chains)))
             for r, eb, et in zip(rhat, ess_b, ess_t)]
@@ -171,8 +194,6 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
     studies). X: (K, n, p), y: (K, n); same options as :func:`fit_linear_bayes`.
     ``bucket``: hold the n samples in ``bucket_length(n)`` (module doc).
     """
-    import arviz as az
-
     p, q = noise_orders(noise, p, q)
     X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
     my = y.mean(axis=1)
@@ -196,17 +217,15 @@ def fit_linear_bayes_batch(X, y, *, seed: int, noise: str = "ar", p: int = 1, q:
     groups = {"posterior": post, "sample_stats": stats, "observed_data": {"y": y}}
     if pointwise:
         groups["log_likelihood"] = {"y": _pointwise_all(post, X, y, bucket)}
-    idata = az.from_dict(**groups)
-    conv = convergence_of(idata, [v for v in ("beta", "sigma", "phi", "theta") if v in post],
-                          num_chains)
+    conv = convergence_of(post, stats["diverging"], num_chains)
     flat_beta = beta.reshape((-1,) + beta.shape[2:])  # (draws, K, p)
     tail = (1.0 - level) / 2
     interval = np.moveaxis(np.quantile(flat_beta, [tail, 1.0 - tail], axis=0), 0, -1)
     noise_mean = {"sigma": post["sigma"].mean(axis=(0, 1)),
                   "phi": post["phi"].mean(axis=(0, 1)) if p else np.zeros((len(y), 0)),
                   "theta": post["theta"].mean(axis=(0, 1)) if q else np.zeros((len(y), 0))}
-    return BayesFit(idata, flat_beta.mean(0), flat_beta.std(0, ddof=1), interval, float(level),
-                    noise_mean, conv)
+    return BayesFit(groups, flat_beta.mean(0), flat_beta.std(0, ddof=1), interval,
+                    float(level), noise_mean, conv)
 
 
 #: over draws (outer) and sensors (inner); compiled once per shape
@@ -241,20 +260,17 @@ def fit_linear_bayes(X, y, *, seed: int, noise: str = "ar", p: int = 1, q: int =
         level: credible level of ``interval`` (central, from posterior quantiles).
         pointwise: compute the pointwise log-likelihood (WAIC/LOO) into ``idata``.
     """
-    import arviz as az
-
     b = fit_linear_bayes_batch(np.asarray(X, float)[None], np.asarray(y, float)[None], seed=seed,
                                noise=noise, p=p, q=q, num_warmup=num_warmup,
                                num_samples=num_samples, num_chains=num_chains, level=level,
                                prior_scale=prior_scale, target_accept=target_accept,
                                pointwise=pointwise, bucket=True)
-    post = {k: v[:, :, 0] for k, v in b.idata.posterior.data_vars.items()}
-    groups = {"posterior": {k: np.asarray(v) for k, v in post.items()},
-              "sample_stats": {"diverging": np.asarray(b.idata.sample_stats["diverging"])},
+    groups = {"posterior": {k: v[:, :, 0] for k, v in b.groups["posterior"].items()},
+              "sample_stats": dict(b.groups["sample_stats"]),
               "observed_data": {"y": np.asarray(y, float)}}
     if pointwise:
-        groups["log_likelihood"] = {"y": np.asarray(b.idata.log_likelihood["y"])[:, :, 0]}
+        groups["log_likelihood"] = {"y": b.groups["log_likelihood"]["y"][:, :, 0]}
     noise_mean = {"sigma": float(b.noise["sigma"][0]), "phi": b.noise["phi"][0].tolist(),
                   "theta": b.noise["theta"][0].tolist()}
-    return BayesFit(az.from_dict(**groups), b.mean[0], b.sd[0], b.interval[0], b.level,
-                    noise_mean, b.convergence[0])
+    return BayesFit(groups, b.mean[0], b.sd[0], b.interval[0], b.level, noise_mean,
+                    b.convergence[0])

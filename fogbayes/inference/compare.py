@@ -74,9 +74,10 @@ def loglik_idata(log_lik, *, name: str = "y", posterior: Mapping | None = None):
     return az.from_dict(posterior=dict(posterior), log_likelihood={name: ll})
 
 
-def information(idata, kind: str = "loo") -> IC:
+def information(idata, kind: str = "loo", reff: float = 1.0) -> IC:
     """PSIS-LOO (``kind="loo"``) or WAIC, pointwise, of ``idata``'s log-likelihood group or
-    of an array (draws, n) of independent draws (module doc).
+    of an array (draws, n) of draws whose relative efficiency is ``reff`` (1: independent;
+    for chains, ArviZ's value: :meth:`fogbayes.inference.bayes.BayesFit.relative_efficiency`).
 
     The one place fogbayes calls ``az.loo`` / ``az.waic``; their warnings are returned in
     ``warning`` (and the Pareto k), never printed."""
@@ -85,7 +86,7 @@ def information(idata, kind: str = "loo") -> IC:
 
         if kind not in ("loo", "waic"):
             raise ValueError(f"unknown information criterion {kind!r}: use 'loo' or 'waic'")
-        c = psis.loo(idata) if kind == "loo" else psis.waic(idata)
+        c = psis.loo(idata, reff) if kind == "loo" else psis.waic(idata)
         k_max = float(np.max(c.pareto_k)) if kind == "loo" else float("nan")
         return IC(kind, c.elpd, c.se, c.p, c.pointwise, k_max, c.warning, None)
     import arviz as az
@@ -115,15 +116,16 @@ def difference(a: IC, b: IC) -> tuple[float, float]:
 
 def waic(idata) -> dict:
     """WAIC on the deviance-free ``log`` scale: elpd_waic, its SE, p_waic and ArviZ's
-    warning (posterior variance of a log density > 0.4), as a document's dict."""
+    warning (posterior variance of a log density > 0.4), as a document's dict (``idata``:
+    as :func:`information`'s)."""
     w = information(idata, "waic")
     return {"elpd": w.elpd, "se": w.se, "p": w.p, "warning": w.warning}
 
 
-def loo(idata) -> dict:
+def loo(idata, reff: float = 1.0) -> dict:
     """PSIS-LOO: elpd_loo, its SE, p_loo, the worst Pareto k and ArviZ's warning about
-    large k, as a document's dict."""
-    lo = information(idata, "loo")
+    large k, as a document's dict (``idata``, ``reff``: as :func:`information`'s)."""
+    lo = information(idata, "loo", reff)
     return {"elpd": lo.elpd, "se": lo.se, "p": lo.p, "pareto_k_max": lo.pareto_k_max,
             "warning": lo.warning}
 

@@ -2,11 +2,11 @@
 
 ll (S draws, n observations). WAIC: lppd_i = log mean_s exp(ll_si), v_i = var_s ll_si,
 elpd_i = lppd_i - v_i (Watanabe 2010). PSIS (Vehtari, Gelman & Gabry 2017; Vehtari et al.
-2024): of raw log ratios r_i (-ll_i for LOO), the largest M = ceil(min(S/5, 3 sqrt(S))) are
+2024): of raw log ratios r_i (-ll_i for LOO), the largest M = ceil(min(S/5, 3 sqrt(S/reff))) are
 replaced by the expected order statistics of a generalised Pareto fitted to them (Zhang &
 Stephens 2009, with ArviZ's weakly informative prior on k), capped at the largest raw ratio;
-LOO: elpd_i = log sum_s w_si exp(ll_si), w normalised. Relative efficiency 1 (independent
-draws). The same arithmetic as ``az.loo`` / ``az.waic`` / ``az.psislw`` (ArviZ 0.23,
+LOO: elpd_i = log sum_s w_si exp(ll_si), w normalised. Relative efficiency ``reff`` 1 for
+independent draws (of chains: :mod:`fogbayes.stats.mcmc`'s mean ESS over S). The same arithmetic as ``az.loo`` / ``az.waic`` / ``az.psislw`` (ArviZ 0.23,
 ``scale="log"``; tests/test_psis.py checks it to 1e-11), vectorised over observations:
 ArviZ's import (~200 MB, ~1.3 s) and its per-observation Python loop cost more than the
 loop's whole ELPD.
@@ -93,13 +93,14 @@ def _smoothed_rows(x: np.ndarray, m_tail: int) -> tuple[np.ndarray, np.ndarray]:
     return x - _logsumexp(x, axis=1)[:, None], k
 
 
-def _tail_length(S: int) -> int:
-    return int(np.ceil(min(S / 5.0, 3 * np.sqrt(S))))
+def _tail_length(S: int, reff: float = 1.0) -> int:
+    return int(np.ceil(min(S / 5.0, 3 * np.sqrt(S / reff))))
 
 
-def psislw(log_ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def psislw(log_ratios: np.ndarray, reff: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Pareto-smoothed, normalised log importance weights of each row of ``log_ratios``
-    (n, S) and each row's Pareto k: ``az.psislw(log_ratios)`` at relative efficiency 1."""
+    (n, S) and each row's Pareto k: ``az.psislw(log_ratios, reff)``; ``reff``, the draws'
+    relative efficiency (1 for independent draws), sets the tail's length."""
     lw = np.asarray(log_ratios, float)
     S = lw.shape[1]
     order = np.argsort(lw, axis=1)
@@ -107,7 +108,7 @@ def psislw(log_ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     x -= x[:, -1:]
     # the tail: every weight above the cut-off, the M-th largest (or exp-underflow) -- the M
     # largest unless ties or underflow make it shorter; those rows go one by one
-    m_tail = _tail_length(S)
+    m_tail = _tail_length(S, reff)
     cut = np.maximum(x[:, S - m_tail - 1], _TINY_LOG)
     n_tail = np.sum(x > cut[:, None], axis=1)
     w = np.empty_like(x)
@@ -122,11 +123,12 @@ def psislw(log_ratios: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return out, k
 
 
-def loo(ll: np.ndarray) -> Criterion:
-    """PSIS-LOO (``log`` scale) of ``ll`` (S, n) (module doc)."""
+def loo(ll: np.ndarray, reff: float = 1.0) -> Criterion:
+    """PSIS-LOO (``log`` scale) of ``ll`` (S, n) (module doc); ``reff`` as in :func:`psislw`
+    (for chains, ArviZ takes the mean ESS of the posterior's components over S)."""
     ll = np.asarray(ll, float)
     S = ll.shape[0]
-    w, k = psislw(-ll.T)  # rows: observations
+    w, k = psislw(-ll.T, reff)  # rows: observations
     i = _logsumexp(w + ll.T, axis=1)
     lppd = float(np.sum(_logsumexp(ll.T, axis=1) - np.log(S)))
     good_k = min(1 - 1 / np.log10(S), 0.7)

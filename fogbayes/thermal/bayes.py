@@ -32,7 +32,7 @@ def posterior_document(blocks, basis, proc, *, seed: int, noise: str = "ar", ar_
     fit = fit_linear_bayes(design(used.z, basis), used.y, seed=seed, noise=noise, p=ar_order,
                            q=ma_order, num_warmup=num_warmup, num_samples=num_samples,
                            num_chains=num_chains, level=level)
-    draws = np.asarray(fit.idata.posterior["beta"]).reshape(-1, basis.n_terms)
+    draws = fit.groups["posterior"]["beta"].reshape(-1, basis.n_terms)
     raw = draws @ rebase_matrix(basis).T
     tail = (1.0 - level) / 2
     doc = {"noise": noise, "ar_order": ar_order if noise != "white" else 0,
@@ -46,7 +46,9 @@ def posterior_document(blocks, basis, proc, *, seed: int, noise: str = "ar", ar_
                             "theta": fit.noise["theta"]},
            "convergence": fit.convergence._asdict()}
     try:
-        doc["waic"], doc["loo"] = waic(fit.idata), loo(fit.idata)
+        ll = fit.groups["log_likelihood"]["y"]  # (chain, draw, n): draws chain by chain
+        ll = ll.reshape(-1, ll.shape[-1])
+        doc["waic"], doc["loo"] = waic(ll), loo(ll, fit.relative_efficiency())
     except (ValueError, TypeError) as exc:  # reported, not hidden
         doc["waic"] = doc["loo"] = {"error": str(exc)}
     return doc

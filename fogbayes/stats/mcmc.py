@@ -1,0 +1,107 @@
+"""Convergence of MCMC chains without ArviZ: rank-normalised split R-hat, bulk, tail and
+mean effective sample sizes (Vehtari, Gelman, Simpson, Carpenter & Buerkner 2021).
+
+The arithmetic of ArviZ 0.23's ``rhat(method="rank")`` and ``ess(method="bulk" | "tail" |
+"mean")`` for one scalar quantity, ``ary`` (chains, draws); ``tests/test_mcmc_diagnostics.py``
+compares every function with ArviZ. Split chains: each chain's first and last
+``draws // 2`` draws. z-scale: ranks (ties averaged) mapped to normal quantiles with Blom's
+offset 3/8. ESS: autocovariances by FFT, Geyer's initial positive then monotone sequence.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import fft, stats
+
+
+def _split(ary: np.ndarray) -> np.ndarray:
+    half = ary.shape[1] // 2
+    return np.concatenate([ary[:, :half], ary[:, ary.shape[1] - half:]])
+
+
+def _z_scale(ary: np.ndarray) -> np.ndarray:
+    rank = stats.rankdata(ary, method="average").reshape(ary.shape)
+    return stats.norm.ppf((rank - 0.375) / (ary.size + 0.25))
+
+
+def _rhat(ary: np.ndarray) -> float:
+    n = ary.shape[1]
+    between = n * np.var(ary.mean(axis=1), ddof=1)
+    within = np.mean(np.var(ary, axis=1, ddof=1))
+    with np.errstate(invalid="ignore", divide="ignore"):  # constant draws: NaN, as ArviZ
+        return float(np.sqrt((between / within + n - 1) / n))
+
+
+def rhat_rank(ary) -> float:
+    """max(split R-hat of the z-scaled draws, of the z-scaled |draw - median|); NaN for
+    fewer than 2 chains or 4 draws."""
+    ary = np.asarray(ary, float)
+    if ary.shape[0] < 2 or ary.shape[1] < 4:
+        return float("nan")
+    split = _split(ary)
+    return max(_rhat(_z_scale(split)), _rhat(_z_scale(np.abs(split - np.median(split)))))
+
+
+def _autocov(ary: np.ndarray) -> np.ndarray:
+    n = ary.shape[1]
+    m = fft.next_fast_len(2 * n)
+    x = ary - ary.mean(axis=1, keepdims=True)
+    f = np.fft.rfft(x, n=m, axis=1)
+    return np.fft.irfft(f * np.conjugate(f), n=m, axis=1)[:, :n] / n
+
+
+def _ess(ary: np.ndarray) -> float:
+    ary = np.asarray(ary, float)
+    if np.max(ary) - np.min(ary) < np.finfo(float).resolution:
+        return float(ary.size)
+    n_chain, n_draw = ary.shape
+    acov = _autocov(ary)
+    mean_var = np.mean(acov[:, 0]) * n_draw / (n_draw - 1.0)
+    var_plus = mean_var * (n_draw - 1.0) / n_draw
+    if n_chain > 1:
+        var_plus += np.var(ary.mean(axis=1), ddof=1)
+    rho = np.zeros(n_draw)
+    rho_even, rho[0] = 1.0, 1.0
+    rho_odd = rho[1] = 1.0 - (mean_var - np.mean(acov[:, 1])) / var_plus
+    t = 1  # Geyer's initial positive sequence
+    while t < n_draw - 3 and rho_even + rho_odd > 0.0:
+        rho_even = 1.0 - (mean_var - np.mean(acov[:, t + 1])) / var_plus
+        rho_odd = 1.0 - (mean_var - np.mean(acov[:, t + 2])) / var_plus
+        if rho_even + rho_odd >= 0:
+            rho[t + 1], rho[t + 2] = rho_even, rho_odd
+        t += 2
+    max_t = t - 2
+    if rho_even > 0:
+        rho[max_t + 1] = rho_even
+    t = 1  # Geyer's initial monotone sequence
+    while t <= max_t - 2:
+        if rho[t + 1] + rho[t + 2] > rho[t - 1] + rho[t]:
+            rho[t + 1] = rho[t + 2] = (rho[t - 1] + rho[t]) / 2.0
+        t += 2
+    size = n_chain * n_draw
+    tau = -1.0 + 2.0 * np.sum(rho[:max_t + 1]) + np.sum(rho[max_t + 1:max_t + 2])
+    tau = max(tau, 1 / np.log10(size))
+    return float("nan") if np.isnan(rho).any() else float(size / tau)
+
+
+def ess_bulk(ary) -> float:
+    """ESS of the z-scaled split chains."""
+    return _ess(_z_scale(_split(np.asarray(ary, float))))
+
+
+def ess_tail(ary) -> float:
+    """The smaller ESS of the indicators draw <= 5 % and <= 95 % quantile (split chains)."""
+    ary = np.asarray(ary, float)
+    return min(_ess(_split((ary <= np.quantile(ary, p)).astype(float))) for p in (0.05, 0.95))
+
+
+def ess_mean(ary) -> float:
+    """ESS of the split chains themselves (what ArviZ's LOO takes the efficiency from)."""
+    return _ess(_split(np.asarray(ary, float)))
+
+
+def over_elements(fn, draws) -> np.ndarray:
+    """``fn`` of each scalar component of ``draws`` (chains, draws, ...) -> array (...)."""
+    draws = np.asarray(draws, float)
+    flat = draws.reshape(draws.shape[:2] + (-1,))
+    return np.array([fn(flat[:, :, j]) for j in range(flat.shape[2])]).reshape(draws.shape[2:])
