@@ -271,11 +271,18 @@ OBVIOUS_SHARE = 0.25
 
 
 def _loo(post: AllanPosterior):
-    from ..inference.compare import information, loglik_idata
+    """PSIS-LOO and WAIC of the posterior's lags, the chains' relative efficiency as ArviZ
+    takes it (the mean "mean" ESS of the draws' five components over their number)."""
+    from ..inference.compare import information
+    from ..stats.mcmc import ess_mean, over_elements
 
-    idata = loglik_idata(post.log_lik, name="avar",
-                         posterior={"logp": post.draws.reshape(post.log_lik.shape[:2] + (5,))})
-    return information(idata, "loo"), information(idata, "waic")
+    chains, draws = post.log_lik.shape[:2]
+    reff = 1.0
+    if chains > 1:
+        ess = over_elements(ess_mean, post.draws.reshape(chains, draws, 5))
+        reff = float(ess.mean() / (chains * draws))
+    ll = post.log_lik.reshape(chains * draws, -1)
+    return information(ll, "loo", reff), information(ll, "waic")
 
 
 def _obvious(post: AllanPosterior) -> np.ndarray:
