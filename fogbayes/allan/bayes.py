@@ -271,16 +271,13 @@ OBVIOUS_SHARE = 0.25
 
 
 def _loo(post: AllanPosterior):
-    """PSIS-LOO and WAIC of the posterior's lags, the chains' relative efficiency as ArviZ
-    takes it (the mean "mean" ESS of the draws' five components over their number)."""
+    """PSIS-LOO and WAIC of the posterior's lags, with the chains' relative efficiency as
+    ArviZ takes it (:func:`fogbayes.stats.mcmc.relative_efficiency` of the draws)."""
     from ..inference.compare import information
-    from ..stats.mcmc import ess_mean, over_elements
+    from ..stats.mcmc import relative_efficiency
 
     chains, draws = post.log_lik.shape[:2]
-    reff = 1.0
-    if chains > 1:
-        ess = over_elements(ess_mean, post.draws.reshape(chains, draws, 5))
-        reff = float(ess.mean() / (chains * draws))
+    reff = relative_efficiency([post.draws.reshape(chains, draws, 5)])
     ll = post.log_lik.reshape(chains * draws, -1)
     return information(ll, "loo", reff), information(ll, "waic")
 
@@ -293,11 +290,11 @@ def _obvious(post: AllanPosterior) -> np.ndarray:
     return share.max(axis=1) >= OBVIOUS_SHARE
 
 
-def _compare(post_a: AllanPosterior, post_b: AllanPosterior) -> dict:
-    """elpd(a) - elpd(b) by PSIS-LOO (pointwise se) and WAIC."""
+def _compare(scores_a, post_b: AllanPosterior) -> dict:
+    """elpd(a) - elpd(b) by PSIS-LOO (pointwise se) and WAIC; ``scores_a``: ``_loo(a)``."""
     from ..inference.compare import difference
 
-    loo_a, waic_a = _loo(post_a)
+    loo_a, waic_a = scores_a
     loo_b, waic_b = _loo(post_b)
     d, se = difference(loo_a, loo_b)
     return {"d_elpd_loo": d, "se": se, "d_elpd_waic": waic_a.elpd - waic_b.elpd,
@@ -335,7 +332,8 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
                 break
             trials = {t: fit_bayes(data, [u for u in current if u != t], seed=seed, **kw)
                       for t in cands}
-            costs = {t: _compare(post, trials[t]) for t in cands}
+            scores = _loo(post)  # the current model's, once for every candidate
+            costs = {t: _compare(scores, trials[t]) for t in cands}
             worst = min(cands, key=lambda t: costs[t]["d_elpd_loo"])
             for t in cands:
                 table.append({"term": t, "model": "+".join(current), **costs[t]})

@@ -13,6 +13,7 @@ import os
 import re
 import secrets
 import shutil
+import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -58,8 +59,6 @@ def watch_signals() -> Callable[[], None]:
     (seen in CI: a batch killed while writing wrote its summary, then exited 143). The C
     handler writes the pipe at once, in whatever thread the signal landed.
     """
-    import signal
-
     read, write = os.pipe()
     os.set_blocking(read, False)
     os.set_blocking(write, False)
@@ -79,8 +78,6 @@ def stop_requested() -> int | None:
     """The exit code of a stop requested by SIGTERM (143) or SIGINT (130), else None: the
     flag of :func:`request_stop`, or a signal noted in the pipe of :func:`watch_signals`
     whose Python handler has not run yet."""
-    import signal
-
     if _STOP["code"] is None and _WAKE["read"] is not None:
         try:
             noted = os.read(_WAKE["read"], 4096)

@@ -24,7 +24,7 @@ from ..errors import FogbayesError
 from ..models.arma import arma_loglik, pacf_to_ar
 from ..models.buckets import bucket_length
 from ..models.statespace import arma_state_space, kalman_filter
-from ..stats.mcmc import ess_bulk, ess_mean, ess_tail, over_elements, rhat_rank
+from ..stats.mcmc import ess_bulk, ess_tail, over_elements, relative_efficiency, rhat_rank
 from ..support.programs import program
 
 
@@ -69,14 +69,9 @@ class BayesFit:
         return az.from_dict(**self.groups)
 
     def relative_efficiency(self) -> float:
-        """ArviZ's LOO efficiency of chains: the mean ESS ("mean") of every posterior
-        component over the number of draws (1 for one chain)."""
-        post = self.groups["posterior"]
-        first = next(iter(post.values()))
-        if first.shape[0] == 1:
-            return 1.0
-        ess = np.concatenate([np.ravel(over_elements(ess_mean, v)) for v in post.values()])
-        return float(ess.mean() / (first.shape[0] * first.shape[1]))
+        """The chains' relative efficiency for PSIS-LOO, as ArviZ's ``loo`` takes it
+        (:func:`fogbayes.stats.mcmc.relative_efficiency` of the posterior's components)."""
+        return relative_efficiency(self.groups["posterior"].values())
 
 
 def _log1m_tanh2(u):
@@ -258,7 +253,8 @@ def fit_linear_bayes(X, y, *, seed: int, noise: str = "ar", p: int = 1, q: int =
         seed: explicit seed of the sampler.
         noise: "white", "ar" (AR(p)) or "arma" (ARMA(p, q)).
         level: credible level of ``interval`` (central, from posterior quantiles).
-        pointwise: compute the pointwise log-likelihood (WAIC/LOO) into ``idata``.
+        pointwise: compute the pointwise log-likelihood (WAIC/LOO) into
+            ``groups["log_likelihood"]``.
     """
     b = fit_linear_bayes_batch(np.asarray(X, float)[None], np.asarray(y, float)[None], seed=seed,
                                noise=noise, p=p, q=q, num_warmup=num_warmup,

@@ -105,3 +105,15 @@ def over_elements(fn, draws) -> np.ndarray:
     draws = np.asarray(draws, float)
     flat = draws.reshape(draws.shape[:2] + (-1,))
     return np.array([fn(flat[:, :, j]) for j in range(flat.shape[2])]).reshape(draws.shape[2:])
+
+
+def relative_efficiency(draws) -> float:
+    """ArviZ's relative efficiency of chains for PSIS-LOO: the mean "mean" ESS of every
+    scalar component of ``draws`` (arrays (chains, draws, ...)) over chains x draws; 1 for
+    one chain."""
+    draws = [np.asarray(d, float) for d in draws]
+    chains, n = draws[0].shape[:2]
+    if chains == 1:
+        return 1.0
+    ess = np.concatenate([np.ravel(over_elements(ess_mean, d)) for d in draws])
+    return float(ess.mean() / (chains * n))

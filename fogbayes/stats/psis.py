@@ -2,14 +2,14 @@
 
 ll (S draws, n observations). WAIC: lppd_i = log mean_s exp(ll_si), v_i = var_s ll_si,
 elpd_i = lppd_i - v_i (Watanabe 2010). PSIS (Vehtari, Gelman & Gabry 2017; Vehtari et al.
-2024): of raw log ratios r_i (-ll_i for LOO), the largest M = ceil(min(S/5, 3 sqrt(S/reff))) are
-replaced by the expected order statistics of a generalised Pareto fitted to them (Zhang &
-Stephens 2009, with ArviZ's weakly informative prior on k), capped at the largest raw ratio;
-LOO: elpd_i = log sum_s w_si exp(ll_si), w normalised. Relative efficiency ``reff`` 1 for
-independent draws (of chains: :mod:`fogbayes.stats.mcmc`'s mean ESS over S). The same arithmetic as ``az.loo`` / ``az.waic`` / ``az.psislw`` (ArviZ 0.23,
-``scale="log"``; tests/test_psis.py checks it to 1e-11), vectorised over observations:
-ArviZ's import (~200 MB, ~1.3 s) and its per-observation Python loop cost more than the
-loop's whole ELPD.
+2024): of raw log ratios r_i (-ll_i for LOO), the largest M = ceil(min(S/5, 3 sqrt(S/reff)))
+are replaced by the expected order statistics of a generalised Pareto fitted to them (Zhang
+& Stephens 2009, with ArviZ's weakly informative prior on k), capped at the largest raw
+ratio; LOO: elpd_i = log sum_s w_si exp(ll_si), w normalised. ``reff``: 1 for independent
+draws, for chains :func:`fogbayes.stats.mcmc.relative_efficiency`. The same arithmetic as
+``az.loo`` / ``az.waic`` / ``az.psislw`` (ArviZ 0.23, ``scale="log"``; tests/test_psis.py
+checks it to 1e-11), vectorised over observations: ArviZ's import (~200 MB, ~1.3 s) and
+its per-observation Python loop cost more than the loop's whole ELPD.
 """
 
 from __future__ import annotations
