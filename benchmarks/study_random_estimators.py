@@ -48,8 +48,9 @@ def _least_squares(ctx, terms) -> np.ndarray:
     return design(list(terms), ctx.cov) @ beta
 
 
-def row(seed: int) -> dict:
+def row(seed: int, orders: str | None = None) -> dict:
     import fogbayes  # noqa: F401
+    from fogbayes.loop.estimator import hausman
     from fogbayes.diagnose.context import make_context
     from fogbayes.diagnose.fitting import fit_terms
     from fogbayes.loop import run_loop
@@ -58,7 +59,7 @@ def row(seed: int) -> dict:
 
     case = sr.draw(seed)
     rec, true_det, _ = sr.build(case)
-    res = run_loop(rec, "bias-t", seed=case["seed"] % 2**31)
+    res = run_loop(rec, "bias-t", orders=orders, seed=case["seed"] % 2**31)
     ctx, flag = res.context, res.context.outlier
 
     def err(det):
@@ -66,11 +67,15 @@ def row(seed: int) -> dict:
 
     plain = thermal.fit_recording(rec, model="bias-t")
     no_walk = make_context(rec, random_walk=False)
-    return dict(seed=seed, family=case["family"], added=res.effects,
-                plain=err(ctx.rate - np.asarray(thermal.compensate_recording(rec, plain)["output"])),
-                gls_walk=err(ctx.rate - np.asarray(res.compensated["output"], float)),
-                gls_no_walk=err(ctx.rate - ieee_constant(no_walk, fit_terms(no_walk, res.fit.terms)).residual),
-                least_squares=err(_least_squares(ctx, res.fit.terms)))
+    out = dict(seed=seed, family=case["family"], added=res.effects,
+               plain=err(ctx.rate - np.asarray(thermal.compensate_recording(rec, plain)["output"])),
+               gls_walk=err(ctx.rate - np.asarray(res.compensated["output"], float)),
+               gls_no_walk=err(ctx.rate - ieee_constant(no_walk, fit_terms(no_walk, res.fit.terms)).residual),
+               least_squares=err(_least_squares(ctx, res.fit.terms)))
+    test = hausman(ctx, res.fit)[0]
+    out.update(hausman_p=test.p_value, hausman_dof=test.dof,
+               hausman=out["least_squares" if test.estimator == "least_squares" else "gls_walk"])
+    return out
 
 
 def lpd_row(seed: int) -> dict:
@@ -114,10 +119,12 @@ def coverage_row(seed: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", nargs=2, type=int, default=(2, 13), metavar=("FIRST", "STOP"))
+    ap.add_argument("--orders", default=None, help="the loop's base order (default: the loop's)")
     ap.add_argument("--lpd", action="store_true", help="held-out predictive densities instead")
     ap.add_argument("--coverage", action="store_true", help="error against stated s.e. instead")
     a = ap.parse_args()
-    one = lpd_row if a.lpd else coverage_row if a.coverage else row
+    one = lpd_row if a.lpd else coverage_row if a.coverage else (
+        lambda s: row(s, a.orders))
     for s in range(*a.seeds):
         print(json.dumps(one(s)), flush=True)
 

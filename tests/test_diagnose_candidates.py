@@ -90,7 +90,7 @@ def test_block_grid_keeps_bursts_and_marks_gaps_missing():
 def test_terms_are_centred_and_scaled():
     ctx = make_context(make_record(None, seed=1, duration=3600.0, fs=1.0).recording)
     X = np.column_stack([columns(tm, ctx.cov) for tm in base_terms(ctx, "bias-t")])
-    assert X.shape == (ctx.cov.t.size, 3)
+    assert X.shape == (ctx.cov.t.size, 4)  # constant, T', T'^2, T'^3
     assert np.max(np.abs(X[:, 1])) == pytest.approx(1.0, abs=0.05)  # T' spans [-1, 1]
     per = columns(Term("periodic", {"frequency": 0.01}), ctx.cov)
     np.testing.assert_allclose(per[:, 0] ** 2 + per[:, 1] ** 2, 1.0)

@@ -20,7 +20,7 @@ def _kinds(found):
 
 @pytest.fixture(scope="module")
 def cubic():
-    """A 2 h thermal test with a strong cubic bias the quadratic base model lacks."""
+    """A 2 h thermal test with a strong quartic bias the cubic base model lacks."""
     rec = make_record("temperature_order", seed=4, duration=7200.0, fs=1.0, magnitude=8.0).recording
     return make_context(rec, target_blocks=800)
 
@@ -34,9 +34,9 @@ def test_covariate_scan_finds_the_missing_temperature_structure(cubic):
 def test_nothing_unexplained_once_the_effect_is_in_the_model(cubic):
     terms = base_terms(cubic, "bias-t")
     tp = terms[1]
-    full = terms[:1] + [Term("tpoly", {**tp.params, "powers": [1, 2, 3]})]
+    full = terms[:1] + [Term("tpoly", {**tp.params, "powers": [1, 2, 3, 4]})]
     found = scan_unexplained(cubic, fit_terms(cubic, full), seed=0)
-    # The temperature structure is gone once the cubic is in (LR 91 -> 6 on 3 dof). Other
+    # The temperature structure is gone once the quartic is in. Other
     # covariates may still be flagged at alpha / 6 each (this seed reports dT/dt at
     # p = 0.001 after the noise refit, 0.01 at the fixed noise model: the refitted ratio is
     # somewhat anti-conservative, see fogbayes.diagnose.scans).

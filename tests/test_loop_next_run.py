@@ -12,6 +12,7 @@ Measured on 2026-11-24: loop 0.1042, oracle 0.1043, plain fit 0.4964 deg/h (10 s
 from __future__ import annotations
 
 import copy
+import math
 import json
 
 import numpy as np
@@ -190,5 +191,17 @@ def test_px4_export_takes_the_polynomial_and_names_what_it_cannot(runs):
     p = px4_gyro_parameters([(basis, coef)], t_ref=20.0)
     deg_h = 180.0 / np.pi * 3600.0
     # the simulated law about 20 deg C: 0.5 + 0.01 dT + 2e-4 dT^2 (deg/h), fitted on run A
-    assert p["TC_G0_X1_0"] * deg_h == pytest.approx(0.01, rel=0.05)
-    assert p["TC_G0_X2_0"] * deg_h == pytest.approx(2e-4, rel=0.15)
+    # (a cubic fitted too): each derivative at 20 deg C within 3 of its own standard errors
+    tp = keep[1]["params"]
+    z0, s = (20.0 - tp["centre"]) / tp["scale"], tp["scale"]
+    cov = np.asarray(cal["covariance"])[:n, :n]
+    for name, order, truth in (("TC_G0_X1_0", 1, 0.01), ("TC_G0_X2_0", 2, 2e-4)):
+        # d^order/dT^order / order! of sum_k b_k z^k at z0: gradient g over the coefficients
+        g = np.zeros(n)
+        for j, k in enumerate(tp["powers"]):
+            if k >= order:
+                g[1 + j] = math.comb(k, order) * z0 ** (k - order) / s ** order
+        se = float(np.sqrt(g @ cov @ g))
+        assert abs(p[name] * deg_h - truth) < 3 * se, (name, p[name] * deg_h, se)
+        assert p[name] * deg_h == pytest.approx(float(g @ np.asarray(cal["coefficients"])),
+                                                rel=1e-9)

@@ -257,7 +257,8 @@ def test_report_of_a_loop_calibration_shows_the_loop_reports_numbers(step_loop, 
     import re
 
     nums = [float(x) for x in re.findall(r"(?:constant|T\^\d) (-?[\d.]+(?:e-?\d+)?)",
-                                           base[2].replace("×10⁻", "e-"))]
+                                           base[2].replace("×10⁻", "e-").translate(
+                                               str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹", "0123456789")))]
     tp = next(t for t in cal["terms"] if t["kind"] == "tpoly")
     i_tp = sum(len(t["labels"]) for t in cal["terms"][:cal["terms"].index(tp)])
     c0 = cal["coefficients"][0]

@@ -81,15 +81,17 @@ def test_planted_effect_equals_formula(name):
 @pytest.mark.parametrize("scenario", ["thermal", "ratetable"])
 def test_a_bare_effect_name_the_scenario_has_is_planted_on_top(scenario):
     """`simulate thermal --effect temperature_order` must not be the clean scenario: the
-    registry's cubic is added to the scenario's quadratic; given coefficients replace it."""
+    registry's top power (a quartic) is added to the scenario's quadratic; given coefficients
+    replace it."""
     clean = simulate(scenario, seed=0, **SMALL[scenario])
     rec, tr = simulate(scenario, seed=0, effects={"temperature_order": {}}, **SMALL[scenario])
     T = tr.covariates.temperature
-    cubic = EFFECTS["temperature_order"].defaults["coeffs"][3]
+    top = EFFECTS["temperature_order"].defaults["coeffs"]
+    k, c = len(top) - 1, top[-1]
     # float64 rounding of the recorded output (rate-table outputs reach ~1e6 deg/h)
-    np.testing.assert_allclose(rec.output - clean.recording.output, cubic * (T - 20.0) ** 3,
+    np.testing.assert_allclose(rec.output - clean.recording.output, c * (T - 20.0) ** k,
                                rtol=0, atol=1e-13 * np.max(np.abs(rec.output)) + 1e-14)
-    assert tr.params["effects"]["temperature_order"]["coeffs"] == [0.5, 0.01, 2e-4, cubic]
+    assert tr.params["effects"]["temperature_order"]["coeffs"] == [0.5, 0.01, 2e-4, 0.0, c]
     own = simulate(scenario, seed=0, effects={"temperature_order": {"coeffs": [1.0]}},
                    **SMALL[scenario]).truth
     np.testing.assert_allclose(own.effects["temperature_order"], 1.0)

@@ -149,8 +149,9 @@ def fit(
     estimator: str = typer.Option(
         "ols", "--estimator",
         help="bias-t/thermal: 'ols' (least squares on 1 s blocks, paper 004) or 'gls' (the "
-             "closed loop's fit with no step added: GLS under the white + flicker + random-walk "
-             "noise model, honest standard errors; writes the loop document)."),
+             "closed loop's fit with no step added: GLS under its noise model less the random "
+             "walk, covariance under the full white + flicker + random-walk model; writes the "
+             "loop document)."),
     time_unit: str = TIME_UNIT_OPT,
     quiet: bool = QUIET_OPT,
 ):

@@ -10,7 +10,8 @@ class TemperatureOrder(Effect):
     name = "temperature_order"
     what = "a higher power of T"
     description = "bias polynomial in temperature, sum_i c_i (T - T_ref)^i (deg/h)"
-    defaults = {"coeffs": [0.0, 0.0, 0.0, 2e-6], "T_ref": 20.0}
+    # a quartic: the power above the bias-t base's cubic (loop/bases.py)
+    defaults = {"coeffs": [0.0, 0.0, 0.0, 0.0, 1e-7], "T_ref": 20.0}
     same_on_top = ("T_ref",)
     max_times = 3
 
@@ -28,7 +29,8 @@ class TemperatureOrder(Effect):
 
     def oracle(self, ctx, p):
         c, s = tscale(ctx)
-        return [Term("tpoly", {"channel": 0, "powers": [3], "centre": c, "scale": s})]
+        return [Term("tpoly", {"channel": 0, "powers": [len(p["coeffs"]) - 1], "centre": c,
+                                "scale": s})]
 
     def candidates(self, ctx, terms):
         if not thermal(ctx):

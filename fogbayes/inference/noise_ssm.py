@@ -339,6 +339,29 @@ def whiten(spec: NoiseSpec, theta, Y, mask, w):
     return V * scale, F
 
 
+@partial(program, static_argnums=0)
+def _whiten_transpose(spec: NoiseSpec, theta, Z, mask, w):
+    def white(Y):
+        V, F = whiten_raw(spec, theta, Y, mask, w)
+        return V * (mask / jnp.sqrt(F))[:, None]
+
+    return jax.vjp(white, jnp.zeros_like(Z))[1](Z)[0]
+
+
+def whiten_transpose(spec: NoiseSpec, theta, Z, mask, w) -> np.ndarray:
+    """L^-T Z (n, C): the transpose of :func:`whiten`'s linear map (the filter's gains do not
+    depend on the data), so L^-T (L^-1 X) = S^-1 X, what a GLS estimate's sandwich needs.
+    Columns zero-padded to a power of four (>= 16), as in :func:`filter_padded`."""
+    Z = np.asarray(Z, float)
+    c = Z.shape[1]
+    C = max(16, 4 ** int(math.ceil(math.log(max(c, 1), 4) - 1e-9)))
+    Zp = np.zeros((Z.shape[0], C))
+    Zp[:, :c] = Z
+    out = _whiten_transpose(spec, jnp.asarray(theta, dtype=float), jnp.asarray(Zp),
+                            jnp.asarray(mask, dtype=float), jnp.asarray(w, dtype=float))
+    return np.asarray(out)[:, :c]
+
+
 def pointwise_loglik(spec: NoiseSpec, theta, y, X, mask, w, betas, sigma2) -> np.ndarray:
     """One-step-ahead predictive log densities log p(y_t | y_<t, beta_s) for draws betas (S, p).
 

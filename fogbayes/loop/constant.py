@@ -27,22 +27,28 @@ def intercept_column(fit: ModelFit) -> int | None:
     return None
 
 
-def mean_variance(spec, theta, w_white: np.ndarray, u: np.ndarray) -> float:
-    """u' S u for the noise model ``(spec, theta)`` (relative to s2; module doc)."""
+def noise_gram(spec, theta, w_white: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """M' S M for the noise model ``(spec, theta)`` (relative to s2; module doc), M (nb, k)."""
     import jax.numpy as jnp
 
     phi, q, p0 = (np.asarray(a, float) for a in system(spec, unpack(spec, jnp.asarray(
         theta, dtype=float))))
-    u = np.asarray(u, float)
-    total = float(np.sum(u * u * np.asarray(w_white, float)))
-    n = u.size
+    M = np.asarray(M, float).reshape(len(w_white), -1)
+    total = M.T @ (M * np.asarray(w_white, float)[:, None])
+    n = M.shape[0]
     for ph, qj, pj in zip(phi, q, p0):
         if pj > 0:
-            total += pj * float(np.sum(u * ph ** np.arange(n))) ** 2
-        # G_s = u_{s+1} + phi G_{s+1}, G_{n-1} = 0: a first-order filter run backwards
-        g = lfilter([1.0], [1.0, -ph], u[:0:-1])[::-1]
-        total += qj * float(np.sum(g * g))
+            a = (ph ** np.arange(n)) @ M
+            total += pj * np.outer(a, a)
+        # G_s = M_{s+1} + phi G_{s+1}, G_{n-1} = 0: a first-order filter run backwards
+        g = lfilter([1.0], [1.0, -ph], M[:0:-1], axis=0)[::-1]
+        total += qj * (g.T @ g)
     return total
+
+
+def mean_variance(spec, theta, w_white: np.ndarray, u: np.ndarray) -> float:
+    """u' S u for the noise model ``(spec, theta)`` (relative to s2; module doc)."""
+    return float(noise_gram(spec, theta, w_white, np.asarray(u, float)[:, None])[0, 0])
 
 
 def ieee_constant(ctx: Context, fit: ModelFit) -> ModelFit:

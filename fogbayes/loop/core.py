@@ -34,7 +34,7 @@ from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, allowed as allowed_for, base_terms
 from .calibration import calibration_json, input_json
-from .constant import ieee_constant
+from .estimator import publish
 from .declared import check_declared, declare, evidence_json as declared_evidence
 from .separable import detectability, separability_warnings
 from .identifiable import collinearity_warnings
@@ -96,12 +96,20 @@ class Options(NamedTuple):
     target_blocks: int = 2500
 
 
+def _published(ctx: Context, fit: ModelFit, cache: dict) -> ModelFit:
+    """:func:`.estimator.publish` of ``fit``, once per fit."""
+    key = ("published", np.asarray(fit.beta).tobytes(), np.asarray(fit.noise.theta).tobytes())
+    if key not in cache:
+        cache[key] = publish(ctx, fit)
+    return cache[key]
+
+
 def _metrics(ctx: Context, fit: ModelFit, seed: int, cache: dict) -> Metrics:
-    """Metrics of the model as a calibration: its residual with the IEEE 952 constant
-    (:mod:`.constant`), so the RMS keeps the mean the compensated output would have."""
+    """Metrics of the model as a calibration: the residual of its published coefficients
+    (:mod:`.estimator`: IEEE 952 constant), so the RMS is the compensated output's."""
     e = el.elpd(ctx, fit, seed=seed, cache=cache)
     t = ctx.cov.t
-    r = ieee_constant(ctx, fit).residual
+    r = _published(ctx, fit, cache).residual
     return Metrics(block_rms(t, r, ctx.outlier), stability(t, r, ctx.outlier), e.elpd_loo, e.se)
 
 
@@ -363,9 +371,9 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     if model == "allan":
         story, noise_adev = _allan_story(rec, ctx, steps, fit)
         unexplained += story
-    # the calibration's constant is the run's time average (IEEE 952), not the GLS
-    # intercept (the random walk's starting level): :mod:`.constant`
-    fit, fit0 = ieee_constant(ctx, fit), ieee_constant(ctx, fit0)
+    # coefficients under the noise model less its walk, the constant the run's time average
+    # (IEEE 952), the covariance under the full model: :mod:`.estimator`
+    fit, fit0 = _published(ctx, fit, cache), _published(ctx, fit0, cache)
     comp = compensate(rec, ctx, fit, model)
     held = {"folds": holdout.N_FOLDS, "lpd_base": h_base.lpd, "lpd_final": h_cur.lpd,
             "not_kept": held_out, **_plain_check(ctx, model, fit, h_cur)}

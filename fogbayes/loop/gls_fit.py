@@ -1,9 +1,9 @@
 """``fogbayes fit --estimator gls``: the closed loop's fit with no step added.
 
-beta = (X'S^-1 X)^-1 X'S^-1 y, cov(beta) = s2 (X'S^-1 X)^-1, S the covariance of the block means
-under the loop's noise model (:mod:`fogbayes.inference.noise_ssm`, by Kalman filter). Same path
-and document (``fogbayes.loop/1``) as ``fogbayes loop --max-steps 0``; only the default orders
-differ (:data:`fogbayes.thermal.workflow.DEFAULT_ORDERS`).
+GLS under the loop's noise model less its random walk, the IEEE 952 constant, the covariance
+under the full model (:mod:`fogbayes.loop.estimator`). Same path, default orders
+(:data:`fogbayes.thermal.workflow.DEFAULT_ORDERS`) and document (``fogbayes.loop/1``) as
+``fogbayes loop --max-steps 0``.
 """
 
 from __future__ import annotations
@@ -50,10 +50,10 @@ def fit_gls(rec, model: str, orders: str | None = None, *, seed: int = 0) -> dic
 def summary_line(doc: dict) -> str:
     """One line for people: the estimator, its noise model and the residual 10 s RMS."""
     noise = doc.get("calibration", {}).get("noise", {})
-    parts = ["white"] + (["flicker"] if noise.get("flicker_bank") else []) + \
-        (["random walk"] if noise.get("random_walk") else [])
+    parts = ["white"] + (["flicker"] if noise.get("flicker_bank") else [])
     k = int(noise.get("gauss_markov_components") or 0)
     parts += [f"{k} Gauss-Markov"] if k else []
-    return (f"{doc.get('model')}: GLS under {' + '.join(parts)} noise, "
+    walk = " (covariance with the random walk)" if noise.get("random_walk") else ""
+    return (f"{doc.get('model')}: GLS under {' + '.join(parts)} noise{walk}, "
             f"converged={noise.get('converged')}; residual 10 s RMS "
             f"{doc['final']['rms']:.4g} deg/h")

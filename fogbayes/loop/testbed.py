@@ -45,8 +45,10 @@ def _scaled(name: str, magnitude: float, params: dict | None) -> dict:
     for k in fx.get(name).size_keys:  # the parameters that set its size
         if k in base and base[k] is not None:
             out[k] = magnitude * base[k]
-    if name == TemperatureOrder.name:  # the scenario's quadratic plus a cubic term
-        out = {"coeffs": [0.5, 0.01, 2e-4, magnitude * base["coeffs"][3]], "T_ref": 20.0}
+    if name == TemperatureOrder.name:  # the scenario's quadratic plus the default's top power
+        top = list(base["coeffs"])
+        out = {"coeffs": [0.5, 0.01, 2e-4] + [0.0] * (len(top) - 4) + [magnitude * top[-1]],
+               "T_ref": 20.0}
     out.update(params or {})
     return out
 

@@ -1,0 +1,62 @@
+"""The published calibration: the chosen terms' coefficients by GLS under the noise model less
+its random walk, the constant by IEEE Std 952, the covariance under the full noise model.
+
+The loop decides which terms to add under its full noise model (white + flicker + Gauss-Markov +
+random walk). Under a random walk, GLS weighs the record's differences: its estimate of a slow
+temperature law follows whatever else is slow in the record, and on measured noise it ends
+beyond the plain least-squares fit where the walk is weak (``benchmarks/RESULTS_study_random.md``,
+"Which estimator"). So the coefficients are GLS under a *working* noise model without the walk
+(maximum likelihood refit of the rest), which keeps the law anchored to the whole record's
+levels, and their covariance is the sandwich under the full model (honest whatever the working
+model): with L' = S_w^-1 X A, A = (X' S_w^-1 X)^-1 the working GLS map,
+
+    beta = T y,   T' = L' (I - h e_j') + u e_j',   cov = s2 T S T'   (:func:`.constant.noise_gram`)
+
+where the constant c_j is reset to the time average of the output less the other terms
+(u the blocks' sample shares, h = X'u; :mod:`.constant`). Without a walk in the model the
+working model is the full one and this is the IEEE constant of the GLS fit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..diagnose.context import Context
+from ..diagnose.fitting import ModelFit, fit_terms
+from ..effects.terms import design
+from ..inference import noise_ssm as ns
+from .constant import intercept_column, noise_gram
+
+
+def working(ctx: Context, fit: ModelFit) -> ModelFit:
+    """``fit``'s terms refitted under its noise model less the random walk (GLS, noise by
+    maximum likelihood); ``fit`` itself where the model has no walk."""
+    spec = fit.noise.spec
+    if not spec.random_walk:
+        return fit
+    return fit_terms(ctx, fit.terms, spec=spec._replace(random_walk=False), residual=False)
+
+
+def publish(ctx: Context, fit: ModelFit) -> ModelFit:
+    """``fit`` (GLS under the full noise model) as published: the module doc's coefficients
+    and covariance, the residual of the compensated calibration run."""
+    w_fit = working(ctx, fit)
+    wn, full = w_fit.noise, fit.noise
+    X, mask = fit.X, ctx.grid.mask
+    Xw = ns.whiten(wn.spec, wn.theta, X, mask, ctx.grid.w)[0]
+    A = np.linalg.pinv(Xw.T @ Xw)
+    Lt = ns.whiten_transpose(wn.spec, wn.theta, Xw, mask, ctx.grid.w) @ A  # (nb, p)
+    beta = np.array(wn.beta, float)
+    Tt = Lt.copy()
+    j = intercept_column(fit)
+    if j is not None:
+        used = ctx.grid.use & ~ctx.outlier
+        r = ctx.rate - design(list(fit.terms), ctx.cov) @ beta
+        beta[j] += float(np.mean(r[used]))
+        u = ctx.grid.count * mask
+        u = u / u.sum()
+        Tt[:, j] += u - Lt @ (X.T @ u)
+    cov = full.sigma2 * noise_gram(full.spec, full.theta, ctx.grid.w, Tt)
+    res = ctx.rate - design(list(fit.terms), ctx.cov) @ beta
+    return fit._replace(noise=full._replace(beta=beta, cov_beta=0.5 * (cov + cov.T)),
+                        residual=res)
