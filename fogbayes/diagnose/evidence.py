@@ -21,6 +21,7 @@ from . import nullsim
 from .candidates import Candidate
 from .context import Context
 from .fitting import ModelFit
+from ..effects.kinds import Periodic
 from ..effects.terms import Term, columns
 
 ALPHA = 0.01
@@ -233,7 +234,7 @@ def screen_periodic(ctx: Context, wm: Whitened, cand: Candidate) -> Screened | N
     lp = -0.5 * float(P[b])
     m = _m_eff(-0.5 * Ps.max(axis=0), int(sel.sum()))
     freq = float(f[sel][b])
-    term = Term("periodic", {"effect": cand.effect, "frequency": freq})
+    term = Term(Periodic.name, {"effect": cand.effect, "frequency": freq})
     return Screened(cand, term, freq, float(P[b]), 2, lp, m, calibrated_log_p(lp, m))
 
 

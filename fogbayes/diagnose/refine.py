@@ -14,7 +14,7 @@ import numpy as np
 from .context import Context
 from .evidence import Screened, Whitened, _basis, whiten_columns, whitened_model
 from .fitting import ModelFit, fit_terms
-from ..effects.kinds import KINDS, kind_of
+from ..effects.kinds import KINDS, Periodic, Step, kind_of
 from ..effects.terms import Term, columns
 
 #: sub-block positions per block tried by :func:`polish_step`
@@ -34,7 +34,7 @@ def _with(term: Term, **changes) -> Term:
 def _local_terms(ctx: Context, s: Screened) -> list[Term]:
     term, grid = s.best, s.candidate.grid
     k = term.kind
-    if k == "step":
+    if k == Step.name:
         times = np.array([g.params["time"] for g in grid])
         i = int(np.argmin(np.abs(times - term.params["time"])))
         lo = times[max(i - 1, 0)]
@@ -50,7 +50,7 @@ def _local_terms(ctx: Context, s: Screened) -> list[Term]:
         lo = vals[max(i - 1, 0)] if i > 0 else v / 2.0
         hi = vals[min(i + 1, vals.size - 1)] if i < vals.size - 1 else v * 2.0
         return [_with(term, **{key: float(x)}) for x in np.geomspace(lo, hi, 25)]
-    if k == "periodic":
+    if k == Periodic.name:
         df = 1.0 / (2 * ctx.grid.n * ctx.grid.dt)
         f = term.params["frequency"]
         return [_with(term, frequency=float(x)) for x in np.linspace(f - df, f + df, 41)]
@@ -107,7 +107,7 @@ def polish_step(ctx: Context, base: ModelFit, alt: ModelFit) -> ModelFit:
     rises (module doc). Any other last term: ``alt`` unchanged.
     """
     term = alt.terms[-1]
-    if term.kind != "step":
+    if term.kind != Step.name:
         return alt
     dt = ctx.grid.dt
     offsets = dt * np.linspace(-1.0, 1.0, 2 * STEP_SUBDIVISIONS + 1)

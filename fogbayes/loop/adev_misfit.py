@@ -14,6 +14,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from ..allan.model import markov_avar, sinusoid_avar
+from ..effects.kinds import Periodic
 from ..stats.allan import allan_deviation
 
 
@@ -30,7 +31,7 @@ def _extra_avar(tau: np.ndarray, details) -> np.ndarray:
     for d in details:
         if d.get("term") == "gauss_markov_noise":
             out += np.asarray(markov_avar(tau, sigma=d["sigma_deg_h"], tau_c=d["tau_c_s"]))
-        elif d.get("term") == "periodic":
+        elif d.get("term") == Periodic.name:
             out += np.asarray(sinusoid_avar(tau, amplitude=d["amplitude_deg_h"]["value"],
                                             frequency=d["frequency_hz"]))
     return out

@@ -38,13 +38,12 @@ def declarable(model: str) -> tuple[str, ...]:
 def check_declared(names, model: str, *, where: str = "--effect") -> tuple[str, ...]:
     """``names`` as a tuple, each a declarable effect of ``model`` (one line naming ``where``,
     an option or an argument, and the known names otherwise)."""
-    text = isinstance(names, str)
+    if isinstance(names, str) and names:
+        raise ArgumentError("declared effects must be a list of names, not one string",
+                            argument=where, fix=f"pass a tuple of names: declared=({names!r},)")
     names = tuple(names or ())
     if not names:
         return names
-    if text:
-        raise ArgumentError("declared effects must be a list of names, not one string",
-                            argument=where, fix="pass e.g. declared=('temperature_rate',)")
     if model not in ALLOWED:
         return names  # the base model's own check names the model
     known = declarable(model)

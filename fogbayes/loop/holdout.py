@@ -17,6 +17,7 @@ import numpy as np
 
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
+from ..effects import kinds
 from ..effects.step import Step
 from ..inference import noise_ssm as ns
 from .holdout_search import fold_lpd
@@ -109,7 +110,7 @@ def searched_columns(ctx: Context, cand, fit: ModelFit) -> np.ndarray | None:
     over a scale's grid too was tried on the measured-noise study (with the scale at ratio
     1.1 over the candidate's range) and refused a real lag (tau 1800 s, run 3) by 1.8
     nats where the fixed value kept it by 0.55 (benchmarks/RESULTS_loop_real.md)."""
-    if cand.effect != Step.name or fit.terms[-1].kind != "step":
+    if cand.effect != Step.name or fit.terms[-1].kind != kinds.Step.name:
         return None
     return ctx.block_design(list(cand.grid))
 
