@@ -1,12 +1,12 @@
 """Base models the loop starts from, as term lists, and which effects each may gain.
 
-bias-t: c0 + sum_{k<=n} c_k T'^k (n = 3, ``fogbayes fit``'s default); thermal: bias-t + sum_{j<=m} d_j (dT/dt)'^j
-(paper 004 eq. 14); composite: U = S1(T) S2(W) W + U0(T) [+ U1(T) t] linearised (paper 000;
-orders "s1,s2,u0[,u1]", :func:`fogbayes.composite.model.read_orders`, default "0,0,2,-");
-allan: a constant, only noise terms may be added. T' = (T - centre) / scale, W' = W / max|W|;
-temperature terms are left out when T spans < 0.1 deg C. Orders grammar and
-defaults of :mod:`fogbayes.thermal.workflow` (a higher T order is a loop step,
-``temperature_order``).
+bias-t: c0 + sum_{k<=n} c_k T'^k (n = 3, ``fogbayes fit``'s default); thermal: bias-t +
+sum_{j<=m} d_j (dT/dt)'^j (paper 004 eq. 14); composite: U = S1(T) S2(W) W + U0(T)
+[+ U1(T) t] linearised (paper 000; orders "s1,s2,u0[,u1]",
+:func:`fogbayes.composite.model.read_orders`, default "0,0,2,-"); allan: a constant, only
+noise terms may be added. T' = (T - centre) / scale, W' = W / max|W|; temperature terms are
+left out when T spans < 0.1 deg C. Orders grammar and defaults of
+:mod:`fogbayes.thermal.workflow` (a higher T order is a loop step, ``temperature_order``).
 """
 
 from __future__ import annotations
