@@ -3,8 +3,8 @@
 Usage::
 
     python benchmarks/study_random.py --set dev [--n 40] [--workers 2]
-    python benchmarks/study_random.py --set report [--n 300] [--workers 2]
-    python benchmarks/study_random.py --set report --summary
+    python benchmarks/study_random.py --set report2 [--n 300] [--workers 2]
+    python benchmarks/study_random.py --set report2 --summary
 
 Every part of a record is drawn from its seed (:func:`draw`):
 
@@ -20,9 +20,10 @@ Every part of a record is drawn from its seed (:func:`draw`):
   warm-up's tau, a hysteresis' form and rate scale or width, a lag's tau) and its size:
   a nominal size times 2^U(-3, 1), across the detection threshold.
 
-Seeds of the ``dev`` set (0, 1, ...) were used while developing the loop; the ``report``
-set (1 000 000 + k) is run once to report. Rows are appended to
-``benchmarks/study_random_<set>.jsonl`` as they finish (resumable, parallel).
+Seeds of the ``dev`` set (0, 1, ...) were used while developing the loop; a report set is
+run once: ``report`` (1 000 000 + k) for the loop of 2026-12-05, ``report2``
+(2 000 000 + k) for the loop with the cubic base and GLS less the walk. Rows are appended
+to ``benchmarks/study_random_<set>.jsonl`` as they finish (resumable, parallel).
 
 Per record, errors are the RMS of the 10 s block means of (fitted deterministic model -
 true deterministic part), **mean kept** (the calibration's constant counts):

@@ -2,8 +2,8 @@
 
 Usage::
 
-    python benchmarks/study_random_power.py --set report [--workers 1]
-    python benchmarks/study_random_power.py --set report --summary
+    python benchmarks/study_random_power.py --set report2 [--workers 1]
+    python benchmarks/study_random_power.py --set report2 --summary
 
 For every record with a planted effect, the record is rebuilt from its seed and the oracle of
 the study (told the family, its parameter searched as the loop places an accepted term,
@@ -89,7 +89,7 @@ def summarise(rows: list[dict], power: dict[int, dict]) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--set", choices=("dev", "report"), default="dev")
+    ap.add_argument("--set", choices=("dev", "report", "report2"), default="dev")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--summary", action="store_true")
     a = ap.parse_args()
