@@ -47,16 +47,16 @@ def publish(ctx: Context, fit: ModelFit) -> ModelFit:
     A = np.linalg.pinv(Xw.T @ Xw)
     Lt = ns.whiten_transpose(wn.spec, wn.theta, Xw, mask, ctx.grid.w) @ A  # (nb, p)
     beta = np.array(wn.beta, float)
+    res = ctx.rate - design(list(fit.terms), ctx.cov) @ beta
     Tt = Lt.copy()
     j = intercept_column(fit)
     if j is not None:
-        used = ctx.grid.use & ~ctx.outlier
-        r = ctx.rate - design(list(fit.terms), ctx.cov) @ beta
-        beta[j] += float(np.mean(r[used]))
+        shift = float(np.mean(res[ctx.grid.use & ~ctx.outlier]))
+        beta[j] += shift
+        res = res - shift  # the per-sample design is built once
         u = ctx.grid.count * mask
         u = u / u.sum()
         Tt[:, j] += u - Lt @ (X.T @ u)
     cov = full.sigma2 * noise_gram(full.spec, full.theta, ctx.grid.w, Tt)
-    res = ctx.rate - design(list(fit.terms), ctx.cov) @ beta
     return fit._replace(noise=full._replace(beta=beta, cov_beta=0.5 * (cov + cov.T)),
                         residual=res)
