@@ -63,3 +63,23 @@ def test_the_covariance_is_the_estimators_scatter_under_the_full_noise_model(rec
     np.testing.assert_allclose(np.std(B, axis=1, ddof=1), se, rtol=0.12)
     # the working model's own GLS covariance misses the walk's share of the scatter
     assert np.sqrt(np.diag(wn.cov_beta))[1:].max() < 0.8 * se[1:].max()
+
+
+def test_the_published_covariance_uses_the_restricted_likelihood_noise(rec):
+    """With white noise only the REML scale is RSS / (n - p): the temperature law's standard
+    errors are weighted least squares' classical ones (statsmodels WLS on the same blocks)."""
+    import statsmodels.api as sm
+
+    from fogbayes.loop.estimator import reml_noise
+
+    ctx = make_context(rec, random_walk=False, flicker=False)
+    fit = fit_terms(ctx, base_terms(ctx, "bias-t"))
+    assert fit.noise.spec.n_theta == 0
+    se = np.sqrt(np.diag(publish(ctx, fit, cov_noise=reml_noise(ctx, fit)).noise.cov_beta))
+    obs = ctx.grid.mask > 0
+    ref = sm.WLS(ctx.y[obs], fit.X[obs], weights=1.0 / ctx.grid.w[obs]).fit()
+    np.testing.assert_allclose(se[1:], ref.bse[1:], rtol=1e-8)
+    # maximum likelihood's scale RSS / n is smaller by sqrt((n - p) / n)
+    ml = np.sqrt(np.diag(publish(ctx, fit).noise.cov_beta))
+    n, p = obs.sum(), fit.X.shape[1]
+    np.testing.assert_allclose(ml[1:] / se[1:], np.sqrt((n - p) / n), rtol=1e-8)

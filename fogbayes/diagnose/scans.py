@@ -31,9 +31,10 @@ def _p(obs: float, sims: np.ndarray) -> float:
     return float((1 + np.sum(sims >= obs)) / (1 + sims.size))
 
 
-def _sim_residuals(ctx: Context, fit: ModelFit, n_sims: int, seed: int):
+def _sim_residuals(ctx: Context, fit: ModelFit, n_sims: int, seed: int,
+                   cache: dict | None = None):
     """Block residual of the data and of simulated noise after the same GLS fit (raw and whitened)."""
-    nf = with_reml(ctx, fit).noise  # REML: ML leaves too little slow noise in the nulls
+    nf = with_reml(ctx, fit, cache).noise  # REML: ML leaves too little slow noise in the nulls
     sims = nullsim.simulate(nf.spec, nf.theta, nf.sigma2, ctx.grid.w, n_sims, seed=seed)
     obs = ctx.grid.mask > 0
     p = fit.X.shape[1]
@@ -221,9 +222,10 @@ def noise_bound_scan(fit: ModelFit, tol: float = 1e-2) -> list[dict]:
 
 
 def scan_unexplained(ctx: Context, fit: ModelFit, *, seed: int = 0, alpha: float = 0.01,
-                     n_sims: int = 200) -> list[dict]:
-    """All scans of the final residual; returns the ``unexplained`` entries."""
-    _, white = _sim_residuals(ctx, fit, n_sims, seed + 31)
+                     n_sims: int = 200, cache: dict | None = None) -> list[dict]:
+    """All scans of the final residual; returns the ``unexplained`` entries (``cache``: the
+    REML noise of ``fit``, :func:`fogbayes.diagnose.reml.with_reml`)."""
+    _, white = _sim_residuals(ctx, fit, n_sims, seed + 31, cache)
     return (noise_bound_scan(fit) + covariate_scans(ctx, fit, alpha)
             + spectral_scans(ctx, fit, white, alpha) + change_point_scans(ctx, white, alpha)
             + autocorrelation_scan(white, alpha))

@@ -133,6 +133,8 @@ def system(spec: NoiseSpec, p: NoiseParams) -> tuple[Array, Array, Array]:
         phis.append(jnp.ones(1))
         qs.append(jnp.exp(p.log_rw)[None])
         p0s.append(jnp.zeros(1))  # the walk's starting level is the intercept
+    if not phis:  # white noise only: no state
+        return jnp.zeros(0), jnp.zeros(0), jnp.zeros(0)
     return jnp.concatenate(phis), jnp.concatenate(qs), jnp.concatenate(p0s)
 
 

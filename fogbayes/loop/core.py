@@ -34,7 +34,7 @@ from ._threads import single_thread_blas
 from .adev_misfit import adev_misfit
 from .bases import ALLOWED, allowed as allowed_for, base_terms
 from .calibration import calibration_json, input_json
-from .estimator import publish
+from .estimator import publish, reml_noise
 from .declared import check_declared, declare, evidence_json as declared_evidence
 from .separable import detectability, separability_warnings
 from .identifiable import collinearity_warnings
@@ -97,10 +97,10 @@ class Options(NamedTuple):
 
 
 def _published(ctx: Context, fit: ModelFit, cache: dict) -> ModelFit:
-    """:func:`.estimator.publish` of ``fit``, once per fit."""
+    """:func:`.estimator.publish` of ``fit``, its covariance under REML noise, once per fit."""
     key = ("published", np.asarray(fit.beta).tobytes(), np.asarray(fit.noise.theta).tobytes())
     if key not in cache:
-        cache[key] = publish(ctx, fit)
+        cache[key] = publish(ctx, fit, cov_noise=reml_noise(ctx, fit, cache))
     return cache[key]
 
 
@@ -363,7 +363,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
         fit, cur = new, m1
         h_cur = holdout.score(ctx, fit)  # the next term is judged with this one held fixed
     tell(None, max_steps, "scanning the residual for unexplained structure")
-    unexplained = scan_unexplained(ctx, fit, seed=seed, alpha=alpha)
+    unexplained = scan_unexplained(ctx, fit, seed=seed, alpha=alpha, cache=cache)
     # what the final model could still be missing on this programme and noise
     detectable = tuple(detectability(ctx, fit, alpha, effects=opts.effects)) \
         if model != "allan" else ()
