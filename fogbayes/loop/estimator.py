@@ -30,6 +30,7 @@ import numpy as np
 
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit, fit_terms
+from ..diagnose.reml import with_reml
 from ..effects.terms import design
 from ..inference import noise_ssm as ns
 from .constant import intercept_column, noise_gram
@@ -47,8 +48,6 @@ def working(ctx: Context, fit: ModelFit) -> ModelFit:
 def reml_noise(ctx: Context, fit: ModelFit, cache: dict | None = None):
     """``fit.noise`` with its hyperparameters by REML on ``fit``'s design and
     s2 = RSS / (n - p) at them (:mod:`fogbayes.diagnose.reml`): the covariance's noise."""
-    from ..diagnose.reml import with_reml
-
     nf = with_reml(ctx, fit, cache).noise
     mask = ctx.grid.mask
     r = ns.gls(nf.spec, nf.theta, ctx.y, fit.X, mask, ctx.grid.w)
