@@ -1,7 +1,9 @@
 """Pooled thermal bias laws of several units of one sensor type: population, spread, outliers.
 
-Per unit b(T) = sum_k a_k (T - T_ref)^k by GLS (:func:`fogbayes.diagnose.fitting.fit_terms`),
-covariance under REML noise (:mod:`fogbayes.diagnose.reml`), rebased to powers of T - T_ref
+Per unit b(T) = sum_k a_k (T - T_ref)^k as the closed loop publishes it
+(:func:`fogbayes.loop.estimator.publish`: GLS under the noise model less its random walk, the
+IEEE 952 constant, the covariance under the full noise at its REML hyperparameters), rebased
+to powers of T - T_ref
 (:func:`fogbayes.models.polynomial.rebase_matrix`): y_u = a_u, Sigma_u = M_u C_u M_u'. Population:
 :mod:`fogbayes.pool.normal` on (y - median) / k per coefficient. Reports (90 %) population mean,
 between-unit sd, a new unit's range, each unit alone and pooled, outlier p-values; the spread
@@ -44,12 +46,11 @@ class ThermalUnit(NamedTuple):
 
 
 def fit_unit(rec, *, order: int = 2, t_ref: float = T_REF, name: str | None = None) -> ThermalUnit:
-    """The GLS bias law of one recording, mapped to powers of ``T - t_ref`` (module doc)."""
+    """The published bias law of one recording, mapped to powers of ``T - t_ref`` (module doc)."""
     from ..diagnose.context import make_context
     from ..diagnose.fitting import fit_terms
-    from ..diagnose.reml import reml_theta
-    from ..inference import noise_ssm as ns
     from ..loop.bases import base_terms
+    from ..loop.estimator import publish, reml_noise
     from ..models.polynomial import PolyBasis, rebase_matrix
 
     ctx = make_context(rec)
@@ -59,14 +60,11 @@ def fit_unit(rec, *, order: int = 2, t_ref: float = T_REF, name: str | None = No
                             "pool", file=rec.meta.source, column="temperature",
                             fix="pool recordings of a temperature sweep, or leave this one out")
     fit = fit_terms(ctx, terms)
-    # the covariance under REML noise (restricted likelihood, fogbayes.diagnose.reml): ML
-    # profiles the design out and underestimates the slow noise that intercept and slope
-    # share, so its standard errors of a0 and a1 were 1.4-1.7x too small on 1 h records
-    theta = reml_theta(fit.noise, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w)
-    r = ns.gls(fit.noise.spec, theta, ctx.y, fit.X, ctx.grid.mask, ctx.grid.w)
-    n_obs, n_coef = float(np.sum(ctx.grid.mask > 0)), fit.X.shape[1]
-    beta = np.asarray(r.beta, float)
-    cov = np.asarray(r.cov_beta, float) * n_obs / max(n_obs - n_coef, 1.0)  # s2_R = RSS/(n-p)
+    # as the loop publishes: the walk does not pull the law, the covariance under REML noise
+    # (ML leaves too little of the slow noise the constant and slope share: its 90 % intervals
+    # of a0 covered 0.62 on 1 h units, REML's 0.85; benchmarks/RESULTS_loop.md)
+    pub = publish(ctx, fit, cov_noise=reml_noise(ctx, fit)).noise
+    beta, cov = np.asarray(pub.beta, float), np.asarray(pub.cov_beta, float)
     p = terms[1].params
     basis = PolyBasis(("T",), tuple((k,) for k in range(order + 1)), (float(p["centre"]),),
                       (float(p["scale"]),))
