@@ -374,6 +374,7 @@ def _run(rec, model, orders, max_steps, alpha, seed, n_sims, n_refit, effects,
     # coefficients under the noise model less its walk, the constant the run's time average
     # (IEEE 952), the covariance under the full model: :mod:`.estimator`
     fit, fit0 = _published(ctx, fit, cache), _published(ctx, fit0, cache)
+    _read_published(steps, fit, rec)
     comp = compensate(rec, ctx, fit, model)
     held = {"folds": holdout.N_FOLDS, "lpd_base": h_base.lpd, "lpd_final": h_cur.lpd,
             "not_kept": held_out, **_plain_check(ctx, model, fit, h_cur)}
@@ -446,9 +447,21 @@ def _allan_story(rec, ctx: Context, steps: list[Step], fit: ModelFit):
                 "Allan deviation"}}], adev
 
 
-def _detail(fit: ModelFit, term, rec) -> dict:
-    p = fit.X.shape[1]
+def _read_published(steps: list[Step], fit: ModelFit, rec) -> None:
+    """Each step's physical reading from the published calibration, so the loop's report
+    and the calibration document state the same numbers for a term of the final model."""
+    for s in steps:
+        where = [i for i, tm in enumerate(fit.terms) if tm == s.term]
+        if s.term is None or not where:
+            continue
+        s.detail.update(_detail(fit, s.term, rec, column=sum(
+            tm.n_cols for tm in fit.terms[:where[-1]])))
+
+
+def _detail(fit: ModelFit, term, rec, column: int | None = None) -> dict:
+    """``term``'s reading in ``fit``: its columns start at ``column`` (default: the last)."""
     k = term.n_cols
-    beta = fit.beta[p - k:]
-    se = np.sqrt(np.diag(fit.noise.cov_beta))[p - k:]
+    a = fit.X.shape[1] - k if column is None else column
+    beta = np.asarray(fit.beta)[a:a + k]
+    se = np.sqrt(np.diag(fit.noise.cov_beta))[a:a + k]
     return describe(term, beta, se, t0=float(rec.time[0]))
