@@ -17,11 +17,15 @@ import numpy as np
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 from ..inference.lockstep import failed_as_large, minimize_one_by_one
+from ..inference.noise_kalman import negloglik
 from ..support.programs import program
 
 
 @partial(program, static_argnums=0)
 def _negreml_and_grad(spec: ns.NoiseSpec, theta, y, X, mask, w, pad):
+    """-log L_R and its gradient by JAX autodiff: the definition that
+    :func:`fogbayes.inference.noise_kalman.negloglik` (``reml=True``, what the fits call) is
+    tested against."""
     def f(th):
         Y = jnp.concatenate([y[:, None], X], axis=1)
         V, F = ns.whiten_raw(spec, th, Y, mask, w)
@@ -73,14 +77,11 @@ def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
     spec = nf.spec
     if spec.n_theta == 0:
         return np.zeros(0)
-    Xp, pad = ns.pad_columns(X)
-    args = tuple(jnp.asarray(a) for a in (np.where(np.asarray(mask) > 0, y, 0.0), Xp,
-                                          np.asarray(mask, float), np.asarray(w, float), pad))
     lo, hi = np.array(ns.bounds(spec)).T
 
     def batch(rows, thetas):  # one row at a time (lockstep's batch interface)
-        v, g = _negreml_and_grad(spec, jnp.asarray(thetas[0]), *args)
-        return np.array([float(v)]), np.asarray(g, dtype=float)[None]
+        v, g = negloglik(spec, thetas[0], y, X, mask, w, reml=True)
+        return np.array([v]), np.asarray(g, dtype=float)[None]
 
     def value(th) -> float:  # the start's objective, a failed point as 1e300
         v, g = batch(None, th[None])

@@ -12,17 +12,11 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 
 from .lockstep import minimize_lockstep, minimize_one_by_one
-from .noise_ssm import (NoiseSpec, _negll_and_grad, _negll_and_grad_batch, _negll_starts, bounds,
-                        gls, pad_columns, padded_width)
-
-#: Batch sizes of the vmapped objective (rows padded up to one of these, larger rounds
-#: split): few compiled shapes per noise structure. One row uses the unbatched program.
-BATCH_SIZES = (4, 16)
-
+from .noise_kalman import negloglik
+from .noise_ssm import NoiseSpec, bounds, gls
 
 class NoiseFit(NamedTuple):
     """Maximum-likelihood noise fit: spec, theta (unconstrained), the GLS at theta, p."""
@@ -73,27 +67,10 @@ def _diverse(starts: np.ndarray, vals: np.ndarray, k: int, gap: float = 3.0) -> 
 
 def _objective(spec: NoiseSpec, problems: list[tuple], mask, w):
     """``batch(rows, thetas)`` of :func:`minimize_lockstep`: row i is ``thetas[i]`` on
-    ``problems[rows[i]]`` = (y, X padded, pad)."""
-    mask_j, w_j = jnp.asarray(mask), jnp.asarray(w)
-
+    ``problems[rows[i]]`` = (y, X), each row by :func:`.noise_kalman.negloglik`."""
     def batch(rows: np.ndarray, thetas: np.ndarray):
-        if rows.size == 1:
-            y, Xp, pad = problems[int(rows[0])]
-            v, g = _negll_and_grad(spec, jnp.asarray(thetas[0]), jnp.asarray(y), jnp.asarray(Xp),
-                                   mask_j, w_j, jnp.asarray(pad))
-            return np.asarray(v, dtype=float)[None], np.asarray(g, dtype=float)[None]
-        vals, grads = [], []
-        big = BATCH_SIZES[-1]
-        for a in range(0, rows.size, big):
-            r, th = rows[a:a + big], thetas[a:a + big]
-            size = next(b for b in BATCH_SIZES if b >= r.size)
-            take = np.r_[np.arange(r.size), np.zeros(size - r.size, int)]  # pad with row 0
-            y, X, pad = (np.stack([problems[i][j] for i in r[take]]) for j in range(3))
-            v, g = _negll_and_grad_batch(spec, jnp.asarray(th[take]), jnp.asarray(y),
-                                         jnp.asarray(X), jnp.asarray(pad), mask_j, w_j)
-            vals.append(np.asarray(v, dtype=float)[:r.size])
-            grads.append(np.asarray(g, dtype=float)[:r.size])
-        return np.concatenate(vals), np.concatenate(grads)
+        out = [negloglik(spec, th, *problems[int(r)], mask, w) for r, th in zip(rows, thetas)]
+        return np.array([v for v, _ in out]), np.array([g for _, g in out])
 
     return batch
 
@@ -120,21 +97,15 @@ def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
             out.append(NoiseFit(spec, np.zeros(0), r.loglik, r.beta, r.cov_beta, r.sigma2,
                                 True, int(X.shape[1])))
         return out
-    P = max(padded_width(X.shape[1]) for X in Xs)  # one shape for all
-    problems = [(np.where(mask > 0, y, 0.0), *pad_columns(X, width=P)) for y, X in zip(ys, Xs)]
+    problems = list(zip(ys, Xs))
     lo, hi = np.array(bounds(spec)).T
-    mask_j, w_j = jnp.asarray(mask), jnp.asarray(w)
     owner, x0s = [], []
-    for k, (y0, Xp, pad) in enumerate(problems):
+    for k, (y, X) in enumerate(problems):
         starts = _starts(spec, theta0[k])
         if extra_starts[k] is not None:
             starts = np.vstack([starts, np.atleast_2d(extra_starts[k])])
         starts = np.clip(starts, lo, hi)
-        rows = -(-len(starts) // 8) * 8  # few distinct shapes: few compilations
-        padded = np.vstack([starts, np.repeat(starts[:1], rows - len(starts), axis=0)])
-        vals = np.asarray(_negll_starts(spec, jnp.asarray(padded), jnp.asarray(y0),
-                                        jnp.asarray(Xp), mask_j, w_j, jnp.asarray(pad)),
-                          dtype=float)[:len(starts)]
+        vals = np.array([negloglik(spec, th, y, X, mask, w, grad=False)[0] for th in starts])
         vals = np.where(np.isfinite(vals), vals, np.inf)
         for x0 in _diverse(starts, vals, n_starts):
             owner.append(k)

@@ -5,7 +5,8 @@ a flicker bank (tau_j spaced by sqrt(10), shared variance v_f: a 1/f spectrum), 
 components, and a random walk from 0. One Kalman pass whitens [y, X]: S = sum m v v' / F,
 beta = S_XX^-1 S_Xy, RSS = sum m r^2 / F (from the whitened residual, for precision),
 s2 = RSS / n_obs, log L = -1/2 [n_obs log(2 pi s2) + sum m log F + n_obs].
-Hyperparameters: :mod:`fogbayes.inference.noise_fit`.
+Hyperparameters: :mod:`fogbayes.inference.noise_fit` (the likelihood and gradient it maximises:
+:mod:`fogbayes.inference.noise_kalman`, held to this module's definition by the tests).
 """
 
 from __future__ import annotations
@@ -233,24 +234,9 @@ def _negll(spec, theta, y, X, mask, w, pad):
 
 @partial(program, static_argnums=0)
 def _negll_and_grad(spec, theta, y, X, mask, w, pad):
+    """-log L and its gradient by JAX autodiff: the definition that
+    :func:`fogbayes.inference.noise_kalman.negloglik` (what the fits call) is tested against."""
     return jax.value_and_grad(lambda th: _negll(spec, th, y, X, mask, w, pad))(theta)
-
-
-@partial(program, static_argnums=0)
-def _negll_starts(spec, thetas, y, X, mask, w, pad):
-    """negll at every row of ``thetas`` (one vmapped pass: the start grid costs one call)."""
-    return jax.vmap(lambda th: _negll(spec, th, y, X, mask, w, pad))(thetas)
-
-
-@partial(program, static_argnums=0)
-def _negll_and_grad_batch(spec, thetas, ys, Xs, pads, mask, w):
-    """negll and gradient of many fits on one block grid: row i is ``thetas[i]`` on
-    ``(ys[i], Xs[i], pads[i])``, one vmapped filter pass for all
-    (:func:`fogbayes.inference.noise_fit.fit_noise_many`)."""
-    def one(th, y, X, pad):
-        return jax.value_and_grad(lambda t: _negll(spec, t, y, X, mask, w, pad))(th)
-
-    return jax.vmap(one)(thetas, ys, Xs, pads)
 
 
 def padded_width(p: int, multiple: int = 8) -> int:
@@ -280,18 +266,8 @@ def whiten_raw(spec: NoiseSpec, theta, Y, mask, w):
     return _filter(phi, q, p0, Y * mask[:, None], mask, w)
 
 
-#: the widest program :func:`filter_padded` runs; wider inputs go through it in chunks
+#: the widest chunk of columns :func:`filter_padded` masks and filters at once
 MAX_FILTER_COLUMNS = 256
-
-
-def _padded_filter(spec: NoiseSpec, theta, Y: np.ndarray, mask, w, minimum: int):
-    """One :func:`whiten_raw` call on Y's columns zero-padded to a power of four."""
-    c = Y.shape[1]
-    C = max(minimum, 4 ** int(math.ceil(math.log(max(c, 1), 4) - 1e-9)))
-    Yp = np.zeros((Y.shape[0], C))
-    Yp[:, :c] = Y
-    return whiten_raw(spec, jnp.asarray(theta, dtype=float), jnp.asarray(Yp),
-                      jnp.asarray(mask, dtype=float), jnp.asarray(w, dtype=float))
 
 
 def _side_by_side(blocks: list[np.ndarray], j: int, k: int) -> np.ndarray:
@@ -302,32 +278,32 @@ def _side_by_side(blocks: list[np.ndarray], j: int, k: int) -> np.ndarray:
         if lo < hi:
             parts.append(b[:, lo:hi])
         at += b.shape[1]
+    if not parts:
+        return np.zeros((blocks[0].shape[0], 0))
     return parts[0] if len(parts) == 1 else np.column_stack(parts)
 
 
-def filter_padded(spec: NoiseSpec, theta, Y, mask, w, minimum: int = 16):
-    """:func:`whiten_raw` with the columns zero-padded to a power of four (>= ``minimum``).
+def filter_padded(spec: NoiseSpec, theta, Y, mask, w):
+    """:func:`whiten_raw`'s values by the CPU filter of :mod:`.noise_kalman` (any width, no
+    compilation per shape), :data:`MAX_FILTER_COLUMNS` columns at a time into one output.
 
-    Few distinct shapes means few compilations (a compile costs seconds, a pass over a
-    few thousand blocks milliseconds). More than :data:`MAX_FILTER_COLUMNS` columns go
-    through that width's program a chunk at a time into one output: the columns share the
-    gains and are filtered independently, so the values are the same, and the memory is
-    the output plus one chunk (a screening whitens thousands of candidate columns).
-    ``Y``: an (n, C) array, or a list of (n, k) arrays side by side (then never stacked
-    whole). Returns NumPy (V (n, C), F (n,)).
+    The columns share the gains and are filtered independently, so chunks change no value;
+    they bound the memory to the output plus one masked chunk (a screening whitens
+    thousands of candidate columns). ``Y``: an (n, C) array, or a list of (n, k) arrays
+    side by side (then never stacked whole). Returns NumPy (V (n, C), F (n,)).
     """
+    from .noise_kalman import innovations  # it imports this module's NoiseSpec
+
     blocks = [np.asarray(b, float) for b in Y] if isinstance(Y, list) else [np.asarray(Y, float)]
     c = sum(b.shape[1] for b in blocks)
-    if c <= MAX_FILTER_COLUMNS:
-        V, F = _padded_filter(spec, theta, _side_by_side(blocks, 0, c), mask, w, minimum)
-        return np.asarray(V)[:, :c], np.asarray(F)
+    keep = (np.asarray(mask, float) > 0)[:, None]
     out = np.empty((blocks[0].shape[0], c))
-    for j in range(0, c, MAX_FILTER_COLUMNS):
-        part = _side_by_side(blocks, j, j + MAX_FILTER_COLUMNS)
-        V, F = _padded_filter(spec, theta, part, mask, w, minimum)
-        out[:, j:j + part.shape[1]] = np.asarray(V)[:, :part.shape[1]]
-        del V
-    return out, np.asarray(F)
+    F = None
+    for j in range(0, max(c, 1), MAX_FILTER_COLUMNS):
+        part = np.where(keep, _side_by_side(blocks, j, j + MAX_FILTER_COLUMNS), 0.0)
+        V, F = innovations(spec, theta, part, mask, w, grad=False)[:2]
+        out[:, j:j + part.shape[1]] = V
+    return out, F
 
 
 def whiten(spec: NoiseSpec, theta, Y, mask, w):

@@ -451,8 +451,10 @@ def _read_published(steps: list[Step], fit: ModelFit, rec) -> None:
     """Each step's physical reading from the published calibration, so the loop's report
     and the calibration document state the same numbers for a term of the final model."""
     for s in steps:
+        if s.term is None:
+            continue
         where = [i for i, tm in enumerate(fit.terms) if tm == s.term]
-        if s.term is None or not where:
+        if not where:
             continue
         s.detail.update(_detail(fit, s.term, rec, column=sum(
             tm.n_cols for tm in fit.terms[:where[-1]])))

@@ -18,10 +18,8 @@ working model is the full one and this is the IEEE constant of the GLS fit.
 
 S and s2 are the full model's at its restricted-likelihood (REML) hyperparameters,
 s2 = RSS / (n - p) (:func:`reml_noise`): ML profiles the design out and leaves too little of the
-slow noise that the constant and the temperature law share. On 60 simulated 1 h chamber
-units with flicker reaching below 1/T (``benchmarks/pool_thermal_units.py``) the 90 %
-intervals of (a0, a1, a2) covered 0.62 / 0.75 / 0.77 with the ML values and 0.85 / 0.87 / 0.88
-with REML.
+slow noise that the constant and the temperature law share, so its intervals cover too little
+(the measured coverage: ``benchmarks/RESULTS_loop.md``, "The published covariance").
 """
 
 from __future__ import annotations

@@ -61,8 +61,8 @@ def fit_unit(rec, *, order: int = 2, t_ref: float = T_REF, name: str | None = No
                             fix="pool recordings of a temperature sweep, or leave this one out")
     fit = fit_terms(ctx, terms)
     # as the loop publishes: the walk does not pull the law, the covariance under REML noise
-    # (ML leaves too little of the slow noise the constant and slope share: its 90 % intervals
-    # of a0 covered 0.62 on 1 h units, REML's 0.85; benchmarks/RESULTS_loop.md)
+    # (ML leaves too little of the slow noise the constant and slope share; the coverage of
+    # both: benchmarks/RESULTS_loop.md)
     pub = publish(ctx, fit, cov_noise=reml_noise(ctx, fit)).noise
     beta, cov = np.asarray(pub.beta, float), np.asarray(pub.cov_beta, float)
     p = terms[1].params
