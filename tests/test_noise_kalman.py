@@ -77,6 +77,6 @@ def test_a_singular_design_is_a_failed_point_not_an_error():
 
     spec = ns.make_spec(4.0, 1600.0)
     y, X, mask, w = _problem(400, 9)
-    X = np.column_stack([X, X[:, 1]])  # a column twice: S_XX singular
+    X = np.column_stack([X, np.zeros(len(y))])  # a column of zeros: S_XX singular
     v, g = nk.negloglik(spec, np.array([-3.0, -9.0]), y, X, mask, w)
     assert np.isnan(v) and failed_as_large(v, g)[0] == 1e300  # what L-BFGS-B is handed

@@ -12,10 +12,12 @@ from __future__ import annotations
 from math import comb
 from typing import NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..errors import FogbayesError, ShapeError
+from ..support.lazy import lazy_module
+
+jnp = lazy_module("jax.numpy")  # at first use: reading the orders needs no JAX
 
 
 class Orders(NamedTuple):

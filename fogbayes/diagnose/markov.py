@@ -1,7 +1,7 @@
 """``markov_noise``: does one more first-order Gauss-Markov noise component improve the fit?
 
 Start: the best point of a (tau_c, v) grid with the other noise hyperparameters kept (one
-vmapped call), then all refitted. :func:`markov_log_p` refers the refitted likelihood ratio to
+call), then all refitted. :func:`markov_log_p` refers the refitted likelihood ratio to
 chi^2_2 (heavier than the fixed-tau_c mixture of Self & Liang 1987; benchmarks/RESULTS_loop.md).
 """
 
@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..inference import noise_ssm as ns
@@ -32,8 +31,8 @@ def _alt_theta(spec: ns.NoiseSpec, theta: np.ndarray, logvar: float, logtau: flo
     p = ns.unpack(spec, theta)
     alt = _alt(spec)
     q = ns.NoiseParams(p.log_flicker, p.log_rw,
-                       jnp.concatenate([p.markov_logvar, jnp.array([logvar])]),
-                       jnp.concatenate([p.markov_logtau, jnp.array([logtau])]))
+                       np.concatenate([p.markov_logvar, [logvar]]),
+                       np.concatenate([p.markov_logtau, [logtau]]))
     return ns.pack(alt, q)
 
 
@@ -57,12 +56,8 @@ def markov_start(ctx: Context, fit: ModelFit) -> Term | None:
         return None
     taus, vs = grid
     thetas = [_alt_theta(spec, theta, math.log(v), math.log(t)) for t in taus for v in vs]
-    y = np.where(ctx.grid.mask > 0, ctx.y, 0.0)[:, None]
-    Xp, pad = ns.pad_columns(fit.X)
-    ll = np.asarray(nullsim.column_logliks(_alt(spec), jnp.asarray(np.array(thetas)),
-                                           jnp.asarray(y), jnp.asarray(Xp),
-                                           jnp.asarray(ctx.grid.mask),
-                                           jnp.asarray(ctx.grid.w), jnp.asarray(pad)))
+    ll = nullsim.column_logliks(_alt(spec), np.array(thetas), ctx.y[:, None], fit.X,
+                                ctx.grid.mask, ctx.grid.w)
     it, iv = np.unravel_index(int(np.argmax(ll[:, 0])), (N_TAU, N_VAR))
     return Term("markov", {"effect": MarkovNoise.name, "tau": float(taus[it]),
                            "logvar": float(math.log(vs[iv]))})

@@ -2,23 +2,18 @@
 
 :func:`simulate` draws series from a :class:`~fogbayes.inference.noise_ssm.NoiseSpec` (each
 component an AR(1)/walk by ``lfilter``). :func:`column_logliks` gives the profile log-likelihood
-of many columns under many hyperparameters: ``noise_ssm.whiten_raw`` then GLS per column,
+of many columns under many hyperparameters: the CPU filter of
+:mod:`fogbayes.inference.noise_kalman`, then GLS per column,
 log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n].
 """
 
 from __future__ import annotations
 
-from functools import partial
-
-import jax
-import jax.numpy as jnp
 import numpy as np
+from scipy.linalg import cho_solve
 
-from ..inference.noise_ssm import NoiseSpec, system, unpack, whiten_raw
-from ..support.programs import program
-
-#: Hyperparameter vectors filtered together (bounds memory: batch x n x columns floats).
-BATCH = 16
+from ..inference.noise_kalman import innovations, system
+from ..inference.noise_ssm import NoiseSpec
 
 
 def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int) -> np.ndarray:
@@ -30,8 +25,7 @@ def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int
     """
     from scipy.signal import lfilter
 
-    sysm = system(spec, unpack(spec, jnp.asarray(theta, dtype=float)))
-    phi, q, p0 = (np.asarray(a, dtype=float) for a in sysm)
+    phi, q, p0 = system(spec, theta)
     w = np.asarray(w, dtype=float)
     n = w.size
     rng = np.random.default_rng(seed)
@@ -45,32 +39,27 @@ def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int
     return np.sqrt(sigma2) * out
 
 
-def _profile_columns(V, F, mask, p: int, pad):
-    """Profile log-likelihood of every response column from innovations V = [V_X, V_Y]."""
-    g = mask / F
-    VX, VY = V[:, :p], V[:, p:]
-    GX = VX * g[:, None]
-    Sxx = GX.T @ VX + jnp.diag(pad)
-    Sxy = GX.T @ VY
-    L = jnp.linalg.cholesky(Sxx)
-    B = jax.scipy.linalg.cho_solve((L, True), Sxy)
-    R = VY - VX @ B  # RSS from the residuals (noise_ssm's module doc, "Precision")
-    rss = jnp.sum(g[:, None] * R * R, axis=0)
-    nobs = mask.sum()
-    return -0.5 * (nobs * jnp.log(2 * jnp.pi * rss / nobs) + jnp.sum(mask * jnp.log(F)) + nobs)
-
-
-@partial(program, static_argnums=0)
-def column_logliks(spec: NoiseSpec, thetas, y_cols, X, mask, w, pad):
-    """(G, C) profile log-likelihoods of C response columns under G hyperparameter vectors.
-
-    Every column is its own regression on X (beta and s2 profiled per column); used to
-    evaluate a grid of noise models on data and simulated series in one compiled call.
-    """
+def column_logliks(spec: NoiseSpec, thetas, y_cols, X, mask, w) -> np.ndarray:
+    """(G, C) profile log-likelihoods of C response columns under G hyperparameter vectors;
+    every column is its own regression on X (beta and s2 profiled per column):
+    log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n]."""
+    mask = np.asarray(mask, float)
     p = X.shape[1]
-    Y = jnp.concatenate([X, y_cols], axis=1)
-
-    def one(th):
-        V, F = whiten_raw(spec, th, Y, mask, w)
-        return _profile_columns(V, F, mask, p, pad)
-    return jax.lax.map(one, thetas, batch_size=BATCH)
+    Y = np.where(mask[:, None] > 0, np.column_stack([X, y_cols]), 0.0)
+    nobs = float(mask.sum())
+    out = []
+    for th in np.atleast_2d(thetas):
+        V, F = innovations(spec, th, Y, mask, w, grad=False)[:2]
+        g = mask / F
+        VX, VY = V[:, :p], V[:, p:]
+        GX = VX * g[:, None]
+        try:
+            L = np.linalg.cholesky(GX.T @ VX)
+        except np.linalg.LinAlgError:
+            out.append(np.full(VY.shape[1], np.nan))
+            continue
+        R = VY - VX @ cho_solve((L, True), GX.T @ VY)  # RSS from the residuals ("Precision")
+        rss = np.sum(g[:, None] * R * R, axis=0)
+        out.append(-0.5 * (nobs * np.log(2 * np.pi * rss / nobs)
+                           + float(np.sum(mask * np.log(F))) + nobs))
+    return np.array(out)

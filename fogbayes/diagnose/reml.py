@@ -10,15 +10,17 @@ from __future__ import annotations
 
 from functools import partial
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 from ..inference.lockstep import failed_as_large, minimize_one_by_one
 from ..inference.noise_kalman import negloglik
+from ..support.lazy import lazy_module
 from ..support.programs import program
+
+jax = lazy_module("jax")  # the JAX definition below only: the fits use noise_kalman
+jnp = lazy_module("jax.numpy")
 
 
 @partial(program, static_argnums=0)

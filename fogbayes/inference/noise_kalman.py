@@ -22,7 +22,8 @@ import numpy as np
 from scipy.linalg import solve_triangular
 
 from ..support.numba_cache import numba
-from .noise_ssm import NoiseSpec
+
+# ``spec`` below is a noise_ssm.NoiseSpec (not imported: noise_ssm filters with this module)
 
 
 def system_and_derivatives(spec: NoiseSpec, theta) -> tuple[np.ndarray, ...]:
@@ -79,6 +80,11 @@ def system_and_derivatives(spec: NoiseSpec, theta) -> tuple[np.ndarray, ...]:
         return z, z, z, np.zeros((k, 0)), np.zeros((k, 0)), np.zeros((k, 0))
     return (np.concatenate(phis), np.concatenate(qs), np.concatenate(p0s),
             np.hstack(dphi), np.hstack(dq), np.hstack(dp0))
+
+
+def system(spec: NoiseSpec, theta) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``noise_ssm.system``'s (phi, q, p0) at ``theta``, in NumPy."""
+    return system_and_derivatives(spec, theta)[:3]
 
 
 def _row(k: int, i: int, values: np.ndarray) -> np.ndarray:
@@ -236,3 +242,72 @@ def negloglik(spec: NoiseSpec, theta, y, X, mask, w, *, reml: bool = False,
 
 def _cho_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
     return solve_triangular(L.T, solve_triangular(L, b, lower=True), lower=False)
+
+
+@numba.njit(cache=True, nogil=True)
+def _gains(phi, q, p0, mask, w, K, F):  # pragma: no cover (Numba)
+    """The filter's gains k_t (n, d) and innovation variances F_t (n,): they do not depend on
+    the data (``_filter``'s covariance recursion alone)."""
+    n, d = mask.size, phi.size
+    P = np.zeros((d, d))
+    for a in range(d):
+        P[a, a] = p0[a]
+    Pz = np.zeros(d)
+    for t in range(n):
+        Ft = w[t]
+        for a in range(d):
+            s = 0.0
+            for b in range(d):
+                s += P[a, b]
+            Pz[a] = s
+            Ft += s
+        F[t] = Ft
+        m = mask[t]
+        for a in range(d):
+            K[t, a] = Pz[a] / Ft
+        for a in range(d):
+            for b in range(a, d):
+                s = phi[a] * (P[a, b] - m * K[t, a] * Pz[b]) * phi[b]
+                P[a, b] = s
+                P[b, a] = s
+            P[a, a] += q[a]
+
+
+@numba.njit(cache=True, nogil=True)
+def _adjoint(phi, K, F, mask, Z, out):  # pragma: no cover (Numba)
+    """out = W' Z for the whitening map W: y -> m v / sqrt(F) (v_t = m_t y_t - 1'A_t,
+    A_{t+1} = phi (A_t + m_t k_t v_t)), by the reverse recursion with lam = dL/dA_{t+1}:
+    vbar_t = Z_t m_t / sqrt(F_t) + m_t (phi k_t)' lam, ybar_t = m_t vbar_t,
+    lam <- phi lam - 1 vbar_t."""
+    n, C = Z.shape
+    d = phi.size
+    lam = np.zeros((d, C))
+    for t in range(n - 1, -1, -1):
+        m = mask[t]
+        sc = m / np.sqrt(F[t])
+        for c in range(C):
+            vb = Z[t, c] * sc
+            if m != 0.0:
+                s = 0.0
+                for a in range(d):
+                    s += phi[a] * K[t, a] * lam[a, c]
+                vb += m * s
+            out[t, c] = m * vb
+            for a in range(d):
+                lam[a, c] = phi[a] * lam[a, c] - vb
+
+
+def whiten_transpose(spec: NoiseSpec, theta, Z, mask, w) -> np.ndarray:
+    """L^-T Z (n, C): the transpose of ``noise_ssm.whiten``'s linear map (the filter's gains
+    do not depend on the data), so L^-T (L^-1 X) = S^-1 X, what a GLS estimate's sandwich
+    needs."""
+    phi, q, p0 = system(spec, theta)
+    mask = np.asarray(mask, float)
+    n, d = mask.size, phi.size
+    K, F = np.empty((n, d)), np.empty(n)
+    _gains(phi, q, p0, mask, np.asarray(w, float), K, F)
+    Z = np.ascontiguousarray(Z, dtype=float)
+    out = np.empty_like(Z)
+    _adjoint(phi, K, F, mask, Z, out)
+    return out
+

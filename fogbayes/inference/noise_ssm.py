@@ -15,14 +15,17 @@ import math
 from functools import partial
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
-from jax import lax
 
+from ..support.lazy import lazy_module
 from ..support.programs import program
+from . import noise_kalman
 
-Array = jax.Array
+# imported at first use: the fits run on the CPU filter (noise_kalman); JAX for its definitions
+jax = lazy_module("jax")
+jnp = lazy_module("jax.numpy")
+lax = lazy_module("jax.lax")
+Array = "jax.Array"  # annotations only
 
 BANK_PER_DECADE = 2.0
 BANK_SPAN = (0.5, 2.0)  # (x dt, x duration): the simulator's flicker reaches 1/T
@@ -81,12 +84,13 @@ class NoiseParams(NamedTuple):
 
 def unpack(spec: NoiseSpec, theta) -> NoiseParams:
     """Unconstrained vector -> :class:`NoiseParams` (absent parts get -inf-like values)."""
-    theta = jnp.asarray(theta, dtype=float)
+    if not hasattr(theta, "shape"):  # NumPy and JAX arrays (traced ones too) index alike
+        theta = np.asarray(theta, dtype=float)
     i = 0
-    lf = jnp.asarray(-60.0)
+    lf = -60.0
     if spec.bank_taus:
         lf, i = theta[i], i + 1
-    lrw = jnp.asarray(-60.0)
+    lrw = -60.0
     if spec.random_walk:
         lrw, i = theta[i], i + 1
     m = spec.n_markov
@@ -292,8 +296,6 @@ def filter_padded(spec: NoiseSpec, theta, Y, mask, w):
     thousands of candidate columns). ``Y``: an (n, C) array, or a list of (n, k) arrays
     side by side (then never stacked whole). Returns NumPy (V (n, C), F (n,)).
     """
-    from .noise_kalman import innovations  # it imports this module's NoiseSpec
-
     blocks = [np.asarray(b, float) for b in Y] if isinstance(Y, list) else [np.asarray(Y, float)]
     c = sum(b.shape[1] for b in blocks)
     keep = (np.asarray(mask, float) > 0)[:, None]
@@ -301,7 +303,7 @@ def filter_padded(spec: NoiseSpec, theta, Y, mask, w):
     F = None
     for j in range(0, max(c, 1), MAX_FILTER_COLUMNS):
         part = np.where(keep, _side_by_side(blocks, j, j + MAX_FILTER_COLUMNS), 0.0)
-        V, F = innovations(spec, theta, part, mask, w, grad=False)[:2]
+        V, F = noise_kalman.innovations(spec, theta, part, mask, w, grad=False)[:2]
         out[:, j:j + part.shape[1]] = V
     return out, F
 
@@ -317,27 +319,11 @@ def whiten(spec: NoiseSpec, theta, Y, mask, w):
     return V * scale, F
 
 
-@partial(program, static_argnums=0)
-def _whiten_transpose(spec: NoiseSpec, theta, Z, mask, w):
-    def white(Y):
-        V, F = whiten_raw(spec, theta, Y, mask, w)
-        return V * (mask / jnp.sqrt(F))[:, None]
-
-    return jax.vjp(white, jnp.zeros_like(Z))[1](Z)[0]
-
-
 def whiten_transpose(spec: NoiseSpec, theta, Z, mask, w) -> np.ndarray:
     """L^-T Z (n, C): the transpose of :func:`whiten`'s linear map (the filter's gains do not
-    depend on the data), so L^-T (L^-1 X) = S^-1 X, what a GLS estimate's sandwich needs.
-    Columns zero-padded to a power of four (>= 16), as in :func:`filter_padded`."""
-    Z = np.asarray(Z, float)
-    c = Z.shape[1]
-    C = max(16, 4 ** int(math.ceil(math.log(max(c, 1), 4) - 1e-9)))
-    Zp = np.zeros((Z.shape[0], C))
-    Zp[:, :c] = Z
-    out = _whiten_transpose(spec, jnp.asarray(theta, dtype=float), jnp.asarray(Zp),
-                            jnp.asarray(mask, dtype=float), jnp.asarray(w, dtype=float))
-    return np.asarray(out)[:, :c]
+    depend on the data), so L^-T (L^-1 X) = S^-1 X, what a GLS estimate's sandwich needs
+    (the reverse recursion of :func:`fogbayes.inference.noise_kalman.whiten_transpose`)."""
+    return noise_kalman.whiten_transpose(spec, theta, Z, mask, w)
 
 
 def pointwise_loglik(spec: NoiseSpec, theta, y, X, mask, w, betas, sigma2) -> np.ndarray:

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..composite.compensate import invert_polynomial
 from ..diagnose.context import Context
 from ..diagnose.covariates import Covariates
 from ..diagnose.fitting import ModelFit
@@ -64,6 +63,8 @@ def rate_polynomial(terms, beta, cov: Covariates, cols=None):
 def solve_rate(terms, beta, cov: Covariates, rate_deg_h: np.ndarray, cols=None) -> np.ndarray:
     """W (deg/s) with model(W) = measured rate (deg/h), per sample (module doc); ``cols``
     as :func:`rate_polynomial`."""
+    from ..composite.compensate import invert_polynomial  # JAX: only a composite model's
+
     a0, pos, neg, ws = rate_polynomial(terms, beta, cov, cols)
     slope = 0.5 * (pos[:, 0] + neg[:, 0])  # dU/dw at 0, the |W| term left out
     # Scaled units per sample (w ~ 1 at full scale, the residual check in units of w): a

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
-from ..inference.noise_ssm import system, unpack
+from ..inference.noise_kalman import system
 from ..diagnose.context import Context
 from ..diagnose.fitting import ModelFit
 
@@ -29,10 +29,7 @@ def intercept_column(fit: ModelFit) -> int | None:
 
 def noise_gram(spec, theta, w_white: np.ndarray, M: np.ndarray) -> np.ndarray:
     """M' S M for the noise model ``(spec, theta)`` (relative to s2; module doc), M (nb, k)."""
-    import jax.numpy as jnp
-
-    phi, q, p0 = (np.asarray(a, float) for a in system(spec, unpack(spec, jnp.asarray(
-        theta, dtype=float))))
+    phi, q, p0 = system(spec, theta)
     M = np.asarray(M, float).reshape(len(w_white), -1)
     total = M.T @ (M * np.asarray(w_white, float)[:, None])
     n = M.shape[0]

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 
-import jax.numpy as jnp
 import numpy as np
 
 from ..diagnose.context import Context
@@ -31,8 +30,8 @@ def _without(spec: ns.NoiseSpec, theta, j: int) -> tuple[ns.NoiseSpec, np.ndarra
     keep = [i for i in range(spec.n_markov) if i != j]
     red = spec._replace(n_markov=spec.n_markov - 1)
     keep = np.asarray(keep, int)
-    q = ns.NoiseParams(p.log_flicker, p.log_rw, jnp.asarray(p.markov_logvar)[keep],
-                       jnp.asarray(p.markov_logtau)[keep])
+    q = ns.NoiseParams(p.log_flicker, p.log_rw, np.asarray(p.markov_logvar)[keep],
+                       np.asarray(p.markov_logtau)[keep])
     return red, np.asarray(ns.pack(red, q), float)
 
 

@@ -43,8 +43,13 @@ def host_device():
     H100 machine the closed loop took 81.6 s with the GPU against 30.5 s on the same
     machine's CPU, with the same result (benchmarks/RESULTS_gpu.md). Large array work
     (compensation, fleet fits, Allan deviations) keeps the default device. Where JAX was
-    started without a CPU backend (``JAX_PLATFORMS=cuda``) this does nothing.
+    started without a CPU backend (``JAX_PLATFORMS=cuda``) this does nothing, and so it
+    does where JAX has not been imported: what runs inside without JAX (the noise fits'
+    compiled loops) needs no device, and a command that never uses JAX does not start it.
     """
+    if "jax" not in sys.modules:
+        yield
+        return
     import jax
 
     try:

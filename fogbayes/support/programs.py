@@ -69,7 +69,7 @@ def release_programs(keep: object = None) -> int:
     programs held compiled code."""
     dropped = 0
     for prog in list(_registry):
-        if prog is not keep and prog.jitted._cache_size():
+        if prog is not keep and "jitted" in prog.__dict__ and prog.jitted._cache_size():
             prog.jitted.clear_cache()
             dropped += 1
     gc.collect()  # executables are freed with their last reference
@@ -98,9 +98,15 @@ class Program:
     jitted function's."""
 
     def __init__(self, fun, **jit_options):
-        self.jitted = jax.jit(fun, **jit_options)
+        self._fun, self._jit_options = fun, jit_options
         functools.update_wrapper(self, fun)
         _registry.add(self)
+
+    @functools.cached_property
+    def jitted(self):
+        """``jax.jit`` of the function, made at first use: defining a program imports no
+        JAX (~2 s of a command that never runs one)."""
+        return jax.jit(self._fun, **self._jit_options)
 
     def __call__(self, *args, **kwargs):
         jitted = self.jitted
@@ -111,10 +117,9 @@ class Program:
         return out
 
     def __getattr__(self, name):  # only for names the instance lacks
-        jitted = self.__dict__.get("jitted")
-        if jitted is None:  # half-built (copy, unpickling): no attributes to forward yet
+        if "_fun" not in self.__dict__:  # half-built (copy, unpickling): nothing to forward yet
             raise AttributeError(name)
-        return getattr(jitted, name)
+        return getattr(self.jitted, name)
 
     def __get__(self, obj, objtype=None):  # as a method, like a plain function
         return self if obj is None else functools.partial(self, obj)
