@@ -94,10 +94,11 @@ def _row(k: int, i: int, values: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _filter(phi, q, p0, dphi, dq, dp0, Y, mask, w, V, F, dV, dF):  # pragma: no cover (Numba)
+def _filter(phi, q, p0, dphi, dq, dp0, Y, mask, w, V, F, dV, dF, G):  # pragma: no cover (Numba)
     """``noise_ssm._filter`` of every column of Y (n, C), with the sensitivities of its
     innovations V (n, C) and variances F (n,) to each of k parameters: dV (k, n, C), dF (k, n).
-    k = 0 gives the filter alone."""
+    k = 0 gives the filter alone; G (n, d), unless it has no rows, receives the gains k_t
+    (they and F do not depend on the data: C = 0 runs the covariance recursion alone)."""
     n, C = Y.shape
     d = phi.size
     K = dq.shape[0]
@@ -115,7 +116,7 @@ def _filter(phi, q, p0, dphi, dq, dp0, Y, mask, w, V, F, dV, dF):  # pragma: no 
     dPz = np.zeros((K, d))
     dkg = np.zeros((K, d))
     dv = np.zeros((K, C))
-    dFt = np.zeros(K)
+    gains = G.shape[0] > 0
     Pf = np.zeros((d, d))
     for t in range(n):
         m = mask[t]
@@ -135,6 +136,8 @@ def _filter(phi, q, p0, dphi, dq, dp0, Y, mask, w, V, F, dV, dF):  # pragma: no 
         F[t] = Ft
         for a in range(d):
             kg[a] = Pz[a] / Ft
+            if gains:
+                G[t, a] = kg[a]
         for i in range(K):
             f = 0.0
             for a in range(d):
@@ -143,7 +146,6 @@ def _filter(phi, q, p0, dphi, dq, dp0, Y, mask, w, V, F, dV, dF):  # pragma: no 
                     s += dP[i, a, b]
                 dPz[i, a] = s
                 f += s
-            dFt[i] = f
             dF[i, t] = f
             for c in range(C):
                 s = 0.0
@@ -198,7 +200,7 @@ def innovations(spec: NoiseSpec, theta, Y, mask, w, grad: bool = True):
     dV, dF = np.empty((K, n, C)), np.empty((K, n))
     _filter(phi, q, p0, np.ascontiguousarray(dphi), np.ascontiguousarray(dq),
             np.ascontiguousarray(dp0), Y, np.asarray(mask, float), np.asarray(w, float),
-            V, F, dV, dF)
+            V, F, dV, dF, np.empty((0, phi.size)))
     return V, F, dV, dF
 
 
@@ -245,35 +247,6 @@ def _cho_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _gains(phi, q, p0, mask, w, K, F):  # pragma: no cover (Numba)
-    """The filter's gains k_t (n, d) and innovation variances F_t (n,): they do not depend on
-    the data (``_filter``'s covariance recursion alone)."""
-    n, d = mask.size, phi.size
-    P = np.zeros((d, d))
-    for a in range(d):
-        P[a, a] = p0[a]
-    Pz = np.zeros(d)
-    for t in range(n):
-        Ft = w[t]
-        for a in range(d):
-            s = 0.0
-            for b in range(d):
-                s += P[a, b]
-            Pz[a] = s
-            Ft += s
-        F[t] = Ft
-        m = mask[t]
-        for a in range(d):
-            K[t, a] = Pz[a] / Ft
-        for a in range(d):
-            for b in range(a, d):
-                s = phi[a] * (P[a, b] - m * K[t, a] * Pz[b]) * phi[b]
-                P[a, b] = s
-                P[b, a] = s
-            P[a, a] += q[a]
-
-
-@numba.njit(cache=True, nogil=True)
 def _adjoint(phi, K, F, mask, Z, out):  # pragma: no cover (Numba)
     """out = W' Z for the whitening map W: y -> m v / sqrt(F) (v_t = m_t y_t - 1'A_t,
     A_{t+1} = phi (A_t + m_t k_t v_t)), by the reverse recursion with lam = dL/dA_{t+1}:
@@ -305,7 +278,9 @@ def whiten_transpose(spec: NoiseSpec, theta, Z, mask, w) -> np.ndarray:
     mask = np.asarray(mask, float)
     n, d = mask.size, phi.size
     K, F = np.empty((n, d)), np.empty(n)
-    _gains(phi, q, p0, mask, np.asarray(w, float), K, F)
+    none = np.zeros((0, d))
+    _filter(phi, q, p0, none, none, none, np.empty((n, 0)), mask, np.asarray(w, float),
+            np.empty((n, 0)), F, np.empty((0, n, 0)), np.empty((0, n)), K)
     Z = np.ascontiguousarray(Z, dtype=float)
     out = np.empty_like(Z)
     _adjoint(phi, K, F, mask, Z, out)
