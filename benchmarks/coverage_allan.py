@@ -44,6 +44,10 @@ def simulate(mix: str, n: int, seed: int) -> tuple[np.ndarray, float, dict]:
     return allan_noise(4 * n, fs, seed=seed, flicker_span=1, **truth)[:n], fs, truth
 
 
+#: sampler sizes passed to the posterior (empty: the library's defaults); --warmup, --draws
+SAMPLER: dict = {}
+
+
 def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
     y, fs, truth = simulate(mix, n, seed)
     data = prepare(y, fs)
@@ -58,7 +62,8 @@ def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
         if method in ("wls", "wls4"):
             fit = fit_wls(data, PARAMS if method == "wls4" else ab.TERMS)
         elif method in ("bayes", "bayes4"):
-            fit = ab.fit_bayes(data, PARAMS if method == "bayes4" else ab.TERMS, seed=seed).fit
+            fit = ab.fit_bayes(data, PARAMS if method == "bayes4" else ab.TERMS, seed=seed,
+                               **SAMPLER).fit
         elif method == "ssm":  # K only: the time-domain likelihood study (k_timedomain.py)
             from k_timedomain import fit_walk
 
@@ -68,7 +73,7 @@ def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
             out[method + "_seconds"] = time.perf_counter() - t0
             continue
         elif method == "select":
-            sel = ab.select_terms(data, seed=seed)
+            sel = ab.select_terms(data, seed=seed, **SAMPLER)
             rep = ab.reported_terms(sel)
             out["select_present"] = list(sel.present)
             fit = sel.selected.fit._replace(terms={t: e for t, (e, _) in rep.items()})
@@ -126,7 +131,13 @@ def main():
     ap.add_argument("--mixes", default="A,B")
     ap.add_argument("--lengths", default=None, help="log2 record lengths (default: per mix)")
     ap.add_argument("--out", default=None, help="also write the raw rows as JSON")
+    ap.add_argument("--warmup", type=int, default=None, help="posterior warm-up steps")
+    ap.add_argument("--draws", type=int, default=None, help="posterior draws per chain")
     args = ap.parse_args()
+    if args.warmup is not None:
+        SAMPLER["num_warmup"] = args.warmup
+    if args.draws is not None:
+        SAMPLER["num_samples"] = args.draws
     methods = tuple(args.methods.split(","))
     rows = []
     t0 = time.perf_counter()

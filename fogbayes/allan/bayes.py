@@ -223,9 +223,9 @@ def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discr
 def _goodness_of_fit(logp_on, mask, data, obs, delta):
     logp = np.array(data.prior_loc, dtype=float)
     logp[mask > 0] = logp_on
-    mean, nu, corr = model_moments(jnp.asarray(logp), jnp.asarray(mask), data, delta)
-    z, _ = cube_root_normal(obs, mean, nu)
-    stat = float(z @ jnp.linalg.solve(corr, z))
+    mean, nu, corr = model_moments(logp, np.asarray(mask, dtype=float), data, delta)
+    z, _ = cube_root_normal(np.asarray(obs), mean, nu)
+    stat = float(z @ np.linalg.solve(corr, z))
     return stat, float(stats.chi2.sf(stat, len(obs)))
 
 
@@ -233,7 +233,7 @@ def posterior_band(post: AllanPosterior, tau, *, ci: float = 0.9, max_draws: int
     """Quantiles (low, median, high) of the model ADEV sigma(tau) over the posterior draws."""
     tau = np.asarray(tau, dtype=float)
     step = max(1, post.draws.shape[0] // max_draws)
-    curves = np.asarray(jax.vmap(lambda p: adev(tuple(p), tau))(jnp.asarray(post.draws[::step])))
+    curves = adev(tuple(post.draws[::step].T[:, :, None]), tau[None, :])  # (draws, taus)
     return tuple(np.quantile(curves, [0.5 - ci / 2, 0.5, 0.5 + ci / 2], axis=0))
 
 
@@ -242,9 +242,9 @@ def predictive_band(post: AllanPosterior, *, ci: float = 0.9, seed: int = 0):
     rng = np.random.default_rng(seed)
     logp = np.log(np.where(post.mask > 0, np.maximum(post.draws, 1e-300), 1.0))
     sel = logp[:: max(1, logp.shape[0] // 1000)]
-    mean, nu, _ = jax.vmap(lambda lp: model_moments(lp, jnp.asarray(post.mask), post.data))(
-        jnp.asarray(sel))
-    mean, nu = np.asarray(mean), np.asarray(nu)
+    mask = np.asarray(post.mask, dtype=float)
+    mean, nu = (np.stack(a) for a in zip(*(model_moments(lp, mask, post.data)[:2]
+                                           for lp in sel)))
     v = 2.0 / (9.0 * nu)
     z = rng.standard_normal(mean.shape)
     sims = np.sqrt(mean * np.clip(1 - v + np.sqrt(v) * z, 0, None) ** 3)

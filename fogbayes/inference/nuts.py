@@ -16,7 +16,7 @@ from ..support.programs import program
 def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                   target_accept_prob: float = 0.8, dense_mass=True,
                   chain_method: str = "vectorized", postprocess=None, on_trace=None,
-                  jit: bool = True):
+                  jit: bool = True, laplace_mass: bool = True):
     """``f(keys (C,), z0 (C, ...), *args) -> (draws (C, num_samples, ...), divergences)``.
 
     ``potential_fn_gen(*args)`` returns the negative log density of the unconstrained
@@ -31,7 +31,9 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     four-unit model loses (8.6 s against 7.3 s sequential)). ``postprocess(z, *args)``
     maps each draw (e.g. to constrained values). ``on_trace`` is called each time JAX traces
     a chain (a way for tests to count compilations). ``jit=False`` returns the function
-    unjitted, to be traced inside a caller's own jit.
+    unjitted, to be traced inside a caller's own jit. ``laplace_mass``: the warm-up starts
+    from :func:`laplace_inverse_mass` at each chain's start instead of the identity (False:
+    NumPyro's identity).
     """
     from numpyro.infer.hmc import hmc
 
@@ -45,7 +47,10 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     def chain(key, z0, *args):
         if on_trace is not None:
             on_trace()
+        inverse_mass = (laplace_inverse_mass(potential_fn_gen(*args), z0, dense_mass)
+                        if laplace_mass else None)
         state = init_kernel(z0, num_warmup, dense_mass=dense_mass,
+                            inverse_mass_matrix=inverse_mass,
                             target_accept_prob=target_accept_prob, model_args=args,
                             rng_key=key)
 
@@ -70,6 +75,35 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     if chain_method == "threads":  # the device choice is per thread: made in each
         return in_threads(on_host(program(chain)))
     return on_host(program(run)) if jit else run
+
+
+#: curvatures below this (per unit of the unconstrained parameter) are not trusted: such
+#: directions start at unit inverse mass, NumPyro's default
+MIN_CURVATURE = 1e-2
+
+
+def laplace_inverse_mass(potential, z0, dense_mass=True):
+    """Inverse Hessian of ``potential`` at ``z0`` (raveled as NumPyro ravels ``z``), the
+    warm-up's starting inverse mass matrix: the Laplace approximation of the posterior's
+    covariance.
+
+    With the identity, NumPyro's first ~175 warm-up iterations (before the first slow window
+    adapts the mass) run at the step size of the stiffest direction: for the Allan posterior,
+    whose log N is known to 0.6 % and an absent term's log to ~1, trees ~300 steps deep, 75 %
+    of all gradient evaluations. Eigenvalues below MIN_CURVATURE (a start off the mode, a
+    flat direction) are replaced by 1. Dense: the matrix; otherwise its diagonal (the
+    marginal variances), as one block over every site.
+    """
+    import jax.numpy as jnp
+    from jax.flatten_util import ravel_pytree
+
+    flat, unravel = ravel_pytree(getattr(z0, "z", z0))  # a ParamInfo's position, or z itself
+    hess = jax.hessian(lambda f: potential(unravel(f)))(flat)
+    lam, vec = jnp.linalg.eigh(0.5 * (hess + hess.T))
+    ok = jnp.isfinite(lam) & (lam > MIN_CURVATURE)
+    inv = (vec * jnp.where(ok, 1.0 / jnp.where(ok, lam, 1.0), 1.0)) @ vec.T
+    inv = jnp.where(jnp.all(jnp.isfinite(inv)), inv, jnp.eye(flat.size))
+    return inv if dense_mass is True else jnp.diag(inv)
 
 
 def in_threads(one_chain):
