@@ -105,7 +105,10 @@ def test_ar_prewhitening_recovers_phi():
     assert yule_walker_cells(r, cell, 2).shape == (2,)
 
 
-def test_cell_noise_algebra_matches_a_dense_gls():
+@pytest.mark.parametrize("lam, rho", [(0.7, 0.6), (0.01, 0.9), (3.0, 0.0)])
+def test_cell_noise_algebra_matches_a_dense_gls(lam, rho):
+    """Both Woodbury branches of the tridiagonal solve (lam median(N) below and above 1) and
+    the white limit rho = 0, against the dense n x n GLS."""
     rng = np.random.default_rng(5)
     K, p = 12, 4
     cell = np.repeat(np.arange(K), rng.integers(3, 20, K))
@@ -114,12 +117,11 @@ def test_cell_noise_algebra_matches_a_dense_gls():
     tmid = np.cumsum(rng.uniform(1, 3, K))
     t_abs = tmid[cell] + 0.01 * np.arange(n)
     st = cell_stats(X, y, cell, t_abs)
-    lam, rho = 0.7, 0.6
     theta, G, rss, reml, dof = _solve(st, lam, rho)
     # dense reference: V = I + lam Z R Z^T with R from the sorted cell mid-times
     tau = np.bincount(cell, t_abs) / np.bincount(cell)
     spacing = np.median(np.diff(np.sort(tau)))
-    R = rho ** (np.abs(tau[:, None] - tau[None, :]) / spacing)
+    R = rho ** (np.abs(tau[:, None] - tau[None, :]) / spacing) if rho > 0 else np.eye(K)
     Z = np.eye(K)[cell]
     V = np.eye(n) + lam * Z @ R @ Z.T
     Vi = np.linalg.inv(V)
