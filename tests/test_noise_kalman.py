@@ -73,7 +73,7 @@ def test_system_derivatives_equal_jax_jacfwd():
 
 
 def test_a_singular_design_is_a_failed_point_not_an_error():
-    from fogbayes.inference.lockstep import failed_as_large
+    from fogbayes.inference.lbfgsb import failed_as_large
 
     spec = ns.make_spec(4.0, 1600.0)
     y, X, mask, w = _problem(400, 9)

@@ -1,6 +1,6 @@
 """Each numerical service has one owner module (docs/DESIGN.md, "Layout"): the information
 criteria (ArviZ's loo/waic/compare) only in inference/compare.py, optax L-BFGS only in
-inference/lsq.py, SciPy's L-BFGS-B only in inference/lockstep.py. Read from the source with
+inference/lsq.py, SciPy's L-BFGS-B only in inference/lbfgsb.py. Read from the source with
 ast, so a second copy written anywhere in the package fails here."""
 
 from __future__ import annotations
@@ -55,5 +55,5 @@ def test_optax_lbfgs_has_one_owner():
 
 
 def test_scipy_lbfgsb_has_one_owner():
-    assert _callers(_lbfgsb) == {"inference/lockstep.py"}
+    assert _callers(_lbfgsb) == {"inference/lbfgsb.py"}
     assert not _imports_from("scipy.optimize", {"fmin_l_bfgs_b"})

@@ -47,8 +47,8 @@ def null_ratios(ctx: Context, base: ModelFit, alt: ModelFit, n_sims: int, *,
     """Refitted ratios 2(logL_alt - logL_base) of ``n_sims`` series simulated under ``base``.
 
     Both models are refitted on every series as :func:`~fogbayes.diagnose.fitting.fit_terms` would (the same starts,
-    the base fit's noise hyperparameters among them); the 2 ``n_sims`` fits run in lockstep
-    (:func:`fogbayes.inference.noise_fit.fit_noise_many`)."""
+    the base fit's noise hyperparameters among them); the 2 ``n_sims`` fits share one
+    block grid (:func:`fogbayes.inference.noise_fit.fit_noise_many`)."""
     nf = base.noise
     noise = simulate(nf.spec, nf.theta, nf.sigma2, ctx.grid.w, n_sims, seed=seed)
     mean = base.X @ nf.beta

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
-from ..inference.lockstep import failed_as_large, minimize_one_by_one
+from ..inference.lbfgsb import failed_as_large, minimize_one_by_one
 from ..inference.noise_kalman import negloglik
 from ..support.lazy import lazy_module
 from ..support.programs import program
@@ -81,7 +81,7 @@ def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
         return np.zeros(0)
     lo, hi = np.array(ns.bounds(spec)).T
 
-    def batch(rows, thetas):  # one row at a time (lockstep's batch interface)
+    def batch(rows, thetas):  # one row at a time (the batch interface of lbfgsb)
         v, g = negloglik(spec, thetas[0], y, X, mask, w, reml=True)
         return np.array([v]), np.asarray(g, dtype=float)[None]
 

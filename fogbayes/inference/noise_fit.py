@@ -2,9 +2,9 @@
 
 The profile likelihood is maximised over theta (log flicker, log walk, Markov log variances and
 time constants) by L-BFGS-B within :func:`~fogbayes.inference.noise_ssm.bounds`, from a small grid
-of starts (up to ``n_starts`` regions; it is often bimodal). :func:`fit_noise_many` runs problems
-sharing a block grid in lockstep (:func:`fogbayes.inference.lockstep.minimize_lockstep`);
-:func:`fit_noise` is its one-problem case.
+of starts (up to ``n_starts`` regions; it is often bimodal). :func:`fit_noise_many` fits problems
+sharing a block grid (:func:`fogbayes.inference.lbfgsb.minimize_one_by_one`); :func:`fit_noise`
+is its one-problem case.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .lockstep import minimize_lockstep, minimize_one_by_one
+from .lbfgsb import minimize_one_by_one
 from .noise_kalman import negloglik
 from .noise_ssm import NoiseSpec, bounds, gls
 
@@ -66,7 +66,7 @@ def _diverse(starts: np.ndarray, vals: np.ndarray, k: int, gap: float = 3.0) -> 
 
 
 def _objective(spec: NoiseSpec, problems: list[tuple], mask, w):
-    """``batch(rows, thetas)`` of :func:`minimize_lockstep`: row i is ``thetas[i]`` on
+    """``batch(rows, thetas)`` of :func:`.lbfgsb.minimize_one_by_one`: row i is ``thetas[i]`` on
     ``problems[rows[i]]`` = (y, X), each row by :func:`.noise_kalman.negloglik`."""
     def batch(rows: np.ndarray, thetas: np.ndarray):
         out = [negloglik(spec, th, *problems[int(r)], mask, w) for r, th in zip(rows, thetas)]
@@ -80,7 +80,7 @@ def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
     """:func:`fit_noise` of every problem ``(ys[k], Xs[k])`` on one block grid (``mask``, ``w``).
 
     ``theta0`` / ``extra_starts``: None, or one entry per problem (each None or as in
-    :func:`fit_noise`). All starts of all problems are minimised in lockstep (module doc).
+    :func:`fit_noise`); each problem keeps the best of its starts.
     """
     ys = [np.asarray(y, float) for y in ys]
     Xs = [np.asarray(X, float) for X in Xs]
@@ -111,9 +111,7 @@ def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
             owner.append(k)
             x0s.append(x0)
     owner = np.asarray(owner)
-    # one problem: its few starts one by one; several: every start of every problem at once
-    minimize = minimize_lockstep if K > 1 else minimize_one_by_one
-    runs = minimize(_objective(spec, [problems[k] for k in owner], mask, w), x0s, bounds(spec),
+    runs = minimize_one_by_one(_objective(spec, [problems[k] for k in owner], mask, w), x0s, bounds(spec),
                     maxiter=maxiter)
     out = []
     for k in range(K):
