@@ -142,7 +142,7 @@ class AllanPosterior(NamedTuple):
     data: AllanFitData
 
 
-def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 1000,
+def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 500,
               num_samples: int = 2000, num_chains: int = 2,
               discrepancy: str | bool = "auto", prior=None) -> AllanPosterior:
     """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring.
@@ -150,9 +150,10 @@ def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 1
     ``prior``: a :class:`~.datasheet.DatasheetPrior` (or a prior document, or its path): a
     log-normal prior on each term the sheet gives; None: half-normal priors throughout.
 
-    Default sizes: with 400 warm-up / 600 draws only 25-55 % of five-term fits met R-hat <
-    1.01 and ESS > 200 (the K-R ridge mixes slowly); 1000 / 2000 gave 95-100 % for ~35 %
-    more time (20 seeds each of two mixes, benchmarks/RESULTS_allan.md section 3).
+    Default sizes, 500 warm-up / 2000 draws per chain: the K-R ridge mixes slowly, so the draws
+    are what ESS > 200 needs; with the warm-up starting at the Laplace mass
+    (:func:`fogbayes.inference.nuts.laplace_inverse_mass`) 500 warm-up steps converge as often
+    as 1000 (benchmarks/RESULTS_allan.md section 3, "Posterior coverage and convergence").
     """
     from ..inference.datasheet import as_prior
 
