@@ -26,9 +26,8 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     CPU it compiles in ~60 % of a vmap's time and runs no slower) or "threads" (one chain's
     program, the chains run side by side in threads, one per core: XLA runs each call on one
     core and JAX's asynchronous dispatch does not overlap two calls, so on a 2-core box two
-    chains can take the time of one; the draws are those of "sequential". Measured per
-    posterior: the Allan fit gains (2.2-2.5 s against 3.9-6.4 s vectorized), the pool's
-    four-unit model loses (8.6 s against 7.3 s sequential)). ``postprocess(z, *args)``
+    chains can take the time of one; the draws are those of "sequential"; the Allan and pool
+    posteriors use it, benchmarks/RESULTS_interactive.md). ``postprocess(z, *args)``
     maps each draw (e.g. to constrained values). ``on_trace`` is called each time JAX traces
     a chain (a way for tests to count compilations). ``jit=False`` returns the function
     unjitted, to be traced inside a caller's own jit. ``laplace_mass``: the warm-up starts

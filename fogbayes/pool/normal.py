@@ -130,13 +130,12 @@ TARGET_ACCEPT, TARGET_ACCEPT_CENSORED, WARMUP_CENSORED = 0.98, 0.995, 1000
 def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
     """NUTS chains over (mu, log s, z) (:mod:`fogbayes.inference.nuts`); the unit weights are
     an argument, so the full fit and every leave-one-out refit share one compilation per
-    (U, P). The chains run one after another (``lax.map``): vmapped, every chain waits at
-    each step for the deepest tree of the four, and the program is several times slower to
-    trace and compile."""
+    (U, P). The chains run in threads, one per core (vmapped, every chain waited at each step
+    for the deepest tree of the four); the draws are those of chains run one after another."""
     from ..inference.nuts import chain_sampler
 
     return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=target,
-                         chain_method="sequential")
+                         chain_method="threads")
 
 
 def _start(y, cov, num_chains, rng):
