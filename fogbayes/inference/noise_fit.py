@@ -111,8 +111,8 @@ def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
             owner.append(k)
             x0s.append(x0)
     owner = np.asarray(owner)
-    runs = minimize_one_by_one(_objective(spec, [problems[k] for k in owner], mask, w), x0s, bounds(spec),
-                    maxiter=maxiter)
+    runs = minimize_one_by_one(_objective(spec, [problems[k] for k in owner], mask, w), x0s,
+                               bounds(spec), maxiter=maxiter)
     out = []
     for k in range(K):
         best = min((runs[i] for i in np.flatnonzero(owner == k)), key=lambda r: r.fun)
