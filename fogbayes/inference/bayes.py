@@ -107,7 +107,8 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
              target_accept: float, shape: tuple[int, int, int]):
     """``run(keys (chains, 2), X, y, n_valid) -> (samples, diverging)``, compiled once per
     configuration and data shape (``n_valid`` is traced: any length held in the shape): :func:`fogbayes.inference.nuts.chain_sampler` on the log density above
-    (diagonal mass; chains one after another, ``lax.map``), started uniform(-2, 2) in the
+    (diagonal mass; one chain's program, the chains side by side in threads: the draws of
+    ``lax.map``'s chains one after another, bit for bit), started uniform(-2, 2) in the
     unconstrained space as NumPyro's ``init_to_uniform``."""
     K, _, n_coef = shape
     shapes = {"beta": (K, n_coef), "log_sigma": (K,), "u_ar": (K, p), "u_ma": (K, q)}
@@ -117,8 +118,8 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
 
     sample = chain_sampler(potential_gen, num_warmup, num_samples,
                            target_accept_prob=target_accept, dense_mass=False,
-                           chain_method="sequential",
-                           postprocess=lambda u, X, y, n_valid: _constrain(u), jit=False)
+                           chain_method="threads",
+                           postprocess=lambda u, X, y, n_valid: _constrain(u))
 
     def start(key):
         k_init, k_run = jax.random.split(key)
@@ -126,11 +127,13 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
         return k_run, {k: jax.random.uniform(ks[k], shp, minval=-2.0, maxval=2.0)
                        for k, shp in shapes.items()}
 
+    starts = on_host(program(jax.vmap(start)))
+
     def run(keys, X, y, n_valid):
-        k_run, z0 = jax.vmap(start)(keys)
+        k_run, z0 = starts(keys)
         return sample(k_run, z0, X, y, n_valid)
 
-    return on_host(program(run))
+    return run
 
 
 def _held(X: np.ndarray, y: np.ndarray, bucket: bool):

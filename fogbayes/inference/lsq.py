@@ -330,8 +330,9 @@ def minimize(loss_fn: Callable[[Any], Array], init: Any, *, max_iter: int = 500,
         return (k == 0) | ((k < max_iter) & (g >= tol) & jnp.isfinite(g))
 
     params, state = jax.lax.while_loop(going, lambda c: step(*c)[:2], (init, opt.init(init)))
-    value, grad = jax.value_and_grad(loss_fn)(params)
-    gnorm = grad_norm(grad)
+    # the line search left the value and gradient at the accepted point in the state (the
+    # loop runs at least once): no further copy of the gradient program to compile
+    value, gnorm = optax.tree.get(state, "value"), grad_norm(optax.tree.get(state, "grad"))
     return MinimizeResult(params, value, gnorm, optax.tree.get(state, "count"),
                           (gnorm < 10 * tol) & jnp.isfinite(value))
 

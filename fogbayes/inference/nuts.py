@@ -1,8 +1,8 @@
 """One NUTS driver for every posterior fogbayes samples (NumPyro's functional ``hmc`` API).
 
 A function of (keys, starts, *data) that warms up and samples several chains: data are
-arguments, so same shapes reuse the compilation; ``num_warmup`` steps in one ``lax.scan``, then
-``num_samples`` keeping draws and divergences.
+arguments, so same shapes reuse the compilation; ``num_warmup + num_samples`` steps in one
+``lax.scan``, keeping the last ``num_samples`` draws and divergences.
 """
 
 from __future__ import annotations
@@ -53,15 +53,14 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                             target_accept_prob=target_accept_prob, model_args=args,
                             rng_key=key)
 
-        def warm(st, _):
-            return sample_kernel(st, model_args=args), None
-
-        def draw(st, _):
+        def step(st, _):
             st = sample_kernel(st, model_args=args)
             return st, (st.z, st.diverging)
 
-        state, _ = jax.lax.scan(warm, state, None, length=num_warmup)
-        _, (zs, div) = jax.lax.scan(draw, state, None, length=num_samples)
+        # one scan over warm-up and sampling (NumPyro's kernel stops adapting after
+        # num_warmup steps itself): one copy of the NUTS kernel to compile, not two
+        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
+        zs, div = jax.tree_util.tree_map(lambda a: a[num_warmup:], (zs, div))
         if postprocess is not None:
             zs = jax.vmap(lambda z: postprocess(z, *args))(zs)
         return zs, div
