@@ -128,7 +128,7 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
     # use both cores: 2.2-2.5 s against 3.9-6.4 s a five-term fit on the bench's record
     return chain_sampler(functools.partial(_potential_gen, discrepancy=discrepancy),
                          num_warmup, num_samples, target_accept_prob=0.95, on_trace=traced,
-                         chain_method="threads")
+                         chain_method="threads", store_key=("allan.bayes", discrepancy))
 
 
 class AllanPosterior(NamedTuple):

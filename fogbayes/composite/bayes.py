@@ -262,7 +262,9 @@ def _sampler(noise: str, p_ar: int, prior_scale: float, target_accept: float, wa
         lambda d, start: partial(potential_energy, model, (d, start), {}), warmup, samples,
         target_accept_prob=target_accept, dense_mass=False, chain_method=chain_method,
         postprocess=lambda z, d, start: constrain_fn(model, (d, start), {}, z,
-                                                     return_deterministic=True))
+                                                     return_deterministic=True),
+        store_key=("composite.bayes", noise, p_ar, prior_scale) if chain_method == "threads"
+        else None)
 
 
 def _unconstrained(init: dict, chains: int) -> dict:

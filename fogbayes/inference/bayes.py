@@ -119,7 +119,8 @@ def _sampler(p: int, q: int, prior_scale: float, num_warmup: int, num_samples: i
     sample = chain_sampler(potential_gen, num_warmup, num_samples,
                            target_accept_prob=target_accept, dense_mass=False,
                            chain_method="threads",
-                           postprocess=lambda u, X, y, n_valid: _constrain(u))
+                           postprocess=lambda u, X, y, n_valid: _constrain(u),
+                           store_key=("inference.bayes", p, q, prior_scale))
 
     def start(key):
         k_init, k_run = jax.random.split(key)

@@ -16,7 +16,7 @@ from ..support.programs import program
 def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                   target_accept_prob: float = 0.8, dense_mass=True,
                   chain_method: str = "vectorized", postprocess=None, on_trace=None,
-                  jit: bool = True, laplace_mass: bool = True):
+                  jit: bool = True, laplace_mass: bool = True, store_key: tuple | None = None):
     """``f(keys (C,), z0 (C, ...), *args) -> (draws (C, num_samples, ...), divergences)``.
 
     ``potential_fn_gen(*args)`` returns the negative log density of the unconstrained
@@ -32,7 +32,10 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     a chain (a way for tests to count compilations). ``jit=False`` returns the function
     unjitted, to be traced inside a caller's own jit. ``laplace_mass``: the warm-up starts
     from :func:`laplace_inverse_mass` at each chain's start instead of the identity (False:
-    NumPyro's identity).
+    NumPyro's identity). ``store_key`` (threads only): a tuple naming what
+    ``potential_fn_gen`` and ``postprocess`` compute; the chain's program is then kept on
+    disk once traced (:func:`fogbayes.support.stored.stored`), so that a new process skips
+    tracing it.
     """
     from numpyro.infer.hmc import hmc
 
@@ -71,7 +74,13 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
         return jax.vmap(chain, in_axes=(0, 0) + (None,) * len(args))(keys, z0, *args)
 
     if chain_method == "threads":  # the device choice is per thread: made in each
-        return in_threads(on_host(program(chain)))
+        if store_key is None:
+            return in_threads(on_host(program(chain)))
+        from ..support.stored import stored
+
+        key = (store_key, num_warmup, num_samples, target_accept_prob, repr(dense_mass),
+               laplace_mass)
+        return in_threads(on_host(stored(chain, key)))
     return on_host(program(run)) if jit else run
 
 

@@ -135,7 +135,7 @@ def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
     from ..inference.nuts import chain_sampler
 
     return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=target,
-                         chain_method="threads")
+                         chain_method="threads", store_key=("pool.normal",))
 
 
 def _start(y, cov, num_chains, rng):
