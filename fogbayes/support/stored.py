@@ -10,8 +10,8 @@ code the persistent cache then holds.
 
 An entry is keyed by the caller's ``key`` (everything the function closes over that is not an
 argument), the arguments' tree, shapes and dtypes, and a fingerprint of fogbayes's sources and
-of the JAX, jaxlib and NumPyro versions: any change of code makes new entries, never a stale
-program. ``FOGBAYES_JAX_CACHE=off`` turns stored programs off with the compile cache.
+of the JAX, jaxlib and NumPyro versions: any change of code makes new entries (a closure value
+left out of ``key`` is the one way to a stale program). ``FOGBAYES_JAX_CACHE=off`` turns stored programs off with the compile cache.
 """
 
 from __future__ import annotations
@@ -62,7 +62,8 @@ def stored(fun, key: tuple, *, platform: str = "cpu"):
 
     ``key``: a tuple of plain values naming everything ``fun`` depends on besides its
     arguments (a sampler's lengths, target acceptance, model variant). ``platform``: the one
-    the stored module runs on (the samplers run on the CPU: :func:`fogbayes.inference.nuts.on_host`).
+    the stored module runs on (the samplers run on the CPU:
+    :func:`fogbayes.inference.nuts.on_host`).
     Where the cache is off, or an argument tree cannot be serialised, it is ``program(fun)``.
     """
     traced = program(fun)
