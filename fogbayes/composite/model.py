@@ -193,14 +193,17 @@ def raw_predict(raw: RawCoefficients, T, W, t):
     return scale + u0 + u1 * t
 
 
-def design_matrix(orders: Orders, sc: Scaling, T, W, t):
-    """X (n, p) with U' = X theta for theta = pack(FullParams); columns in pack order."""
-    Tp, Wp, tp = scale_inputs(sc, jnp.asarray(T), jnp.asarray(W), jnp.asarray(t))
+def design_matrix(orders: Orders, sc: Scaling, T, W, t) -> np.ndarray:
+    """X (n, p) with U' = X theta for theta = pack(FullParams); columns in pack order.
+
+    NumPy, float64: the order searches build one per candidate, and eager JAX compiled a
+    small program for every column count."""
+    Tp, Wp, tp = scale_inputs(sc, *(np.asarray(v, dtype=float) for v in (T, W, t)))
     tpow = [Tp ** i for i in range(max(orders.s1, orders.u0, orders.u1) + 1)]
     cols = [tpow[i] * Wp ** (j + 1) for i in range(orders.s1 + 1) for j in range(orders.s2 + 1)]
     cols += [tpow[i] for i in range(orders.u0 + 1)]
     cols += [tp * tpow[i] for i in range(orders.u1 + 1)]
-    return jnp.stack(cols, axis=-1)
+    return np.stack(cols, axis=-1)
 
 
 def n_params(orders: Orders) -> int:
