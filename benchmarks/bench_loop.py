@@ -77,7 +77,7 @@ def loop_row(case: dict, res, wall: float) -> dict:
 def oracle_rms(res, model: str, effect: str, params: dict) -> float:
     """10 s-block RMS of the true model (base + the planted effect at its true parameters),
     fitted on the loop's own context as the loop fits its models."""
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.metrics import block_rms
     from fogbayes.loop.testbed import oracle_terms
@@ -261,8 +261,8 @@ def oracle_case(case: dict) -> dict:
     ML), both fitted as the loop fits its models.
     """
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.testbed import oracle_terms
 
@@ -288,7 +288,7 @@ def oracle_log10_p_fw(o: dict) -> float:
     """Family-wise p of the oracle's ratio: chi^2 with the effect's columns; for markov_noise
     (one variance at its boundary, tau_c known) the 50:50 chi^2_0 : chi^2_1 mixture (Self &
     Liang 1987); Sidak over :data:`N_CAND`."""
-    from fogbayes.diagnose import evidence as ev
+    from fogbayes.loop import evidence as ev
 
     lp = ev.log_chi2_sf(o["oracle_lr"], o["oracle_dof"])
     if o["effect"] == "markov_noise":
@@ -429,10 +429,10 @@ def _fixed_tau_fit(ctx, fit0, tau_c: float):
 def markov_case(case: dict) -> dict:
     """Oracle and loop statistics of markov_noise on one record (see :func:`markov_info`)."""
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose import evidence as ev
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
-    from fogbayes.diagnose.markov import refit_markov, screen_markov
+    from fogbayes.loop import evidence as ev
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
+    from fogbayes.loop.markov import refit_markov, screen_markov
     from fogbayes.loop.bases import base_terms
 
     tr = _record(case)

@@ -45,7 +45,7 @@ def cases() -> list[dict]:
 
 def prior_of(case: dict):
     from fogbayes.support.jsonable import to_jsonable
-    from fogbayes.diagnose.noise_prior import prior_from_doc
+    from fogbayes.loop.noise_prior import prior_from_doc
     from fogbayes.simulate.scenarios import simulate
     from fogbayes.allan.workflow import fit_recording
 

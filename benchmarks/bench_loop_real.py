@@ -137,7 +137,7 @@ def oracle(ctx, base, effect_col, spec=None):
 
 def run_case(case: dict) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose import evidence as ev
+    from fogbayes.loop import evidence as ev
     from fogbayes.loop import run_loop
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.noise_model import components

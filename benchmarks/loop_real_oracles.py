@@ -53,10 +53,10 @@ def free_fit(ctx, spec, base, effect):
     best value refined between its grid neighbours (``refine.refine``), refitted and
     polished under the refit's noise (``refine.polish``), as the loop places an accepted
     term. None where the record offers no such candidate."""
-    from fogbayes.diagnose.candidates import Candidate, candidates_for
-    from fogbayes.diagnose.evidence import Screened, whitened_model
-    from fogbayes.diagnose.fitting import fit_terms
-    from fogbayes.diagnose.refine import local_stats, polish, refine
+    from fogbayes.loop.candidates import Candidate, candidates_for
+    from fogbayes.loop.evidence import Screened, whitened_model
+    from fogbayes.loop.fitting import fit_terms
+    from fogbayes.loop.refine import local_stats, polish, refine
 
     grid = tuple(tm for c in candidates_for(ctx, list(base), effects=(effect,)) for tm in c.grid)
     if not grid:
@@ -82,7 +82,7 @@ def _described(fit) -> dict | None:
 
 def oracle_row(row: dict) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.context import make_context
+    from fogbayes.loop.context import make_context
     from fogbayes.loop.bases import base_terms
 
     case = {k: row[k] for k in ("shape", "run", "axis", "seed", "reverse", "scale")}

@@ -37,9 +37,9 @@ SD = np.array([0.02, 5e-4, 2e-5])
 def unit(job: tuple[int, int, float]) -> list[float]:
     import dataclasses
 
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
-    from fogbayes.diagnose.reml import reml_theta
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
+    from fogbayes.loop.reml import reml_theta
     from fogbayes.inference import noise_ssm as ns
     from fogbayes.loop.bases import base_terms
     from fogbayes.models.polynomial import PolyBasis, rebase_matrix

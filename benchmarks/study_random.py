@@ -172,7 +172,7 @@ def _err(t, model_det, true_det, flag) -> float:
 
 def run_case(case: dict) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop import run_loop
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.constant import ieee_constant

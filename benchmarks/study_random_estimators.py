@@ -51,8 +51,8 @@ def _least_squares(ctx, terms) -> np.ndarray:
 
 def row(seed: int, orders: str | None = None) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop import run_loop
     from fogbayes.loop.constant import ieee_constant
     from fogbayes.thermal import workflow as thermal
@@ -79,8 +79,8 @@ def row(seed: int, orders: str | None = None) -> dict:
 
 def lpd_row(seed: int) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop import holdout
     from fogbayes.loop.bases import base_terms
 
@@ -95,8 +95,8 @@ def lpd_row(seed: int) -> dict:
 
 def coverage_row(seed: int) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.effects.terms import design
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.constant import ieee_constant

@@ -40,9 +40,9 @@ ALPHA = 0.01
 
 def oracle_evidence(row: dict) -> dict:
     import fogbayes  # noqa: F401
-    from fogbayes.diagnose.candidates import candidates_for
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.candidates import candidates_for
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop.bases import base_terms
     from scipy.stats import chi2
 

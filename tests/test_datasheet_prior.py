@@ -16,7 +16,7 @@ import fogbayes.cli.allan  # noqa: F401  (registers the command)
 import fogbayes.cli.loop  # noqa: F401
 import fogbayes.cli.prior  # noqa: F401
 from fogbayes.data import Metadata, Recording, save
-from fogbayes.diagnose.noise_prior import prior_from_doc, read_noise_prior
+from fogbayes.loop.noise_prior import prior_from_doc, read_noise_prior
 from fogbayes.errors import FogbayesError, UnitError
 from fogbayes.allan import bayes as ab
 from fogbayes.allan.data import prepare

@@ -1,4 +1,4 @@
-"""The bootstrap Bartlett factor (fogbayes.diagnose.bartlett) where the ratio is regular.
+"""The bootstrap Bartlett factor (fogbayes.loop.bartlett) where the ratio is regular.
 
 Under white noise (the noise model still has its flicker bank and walk, both fitted near
 zero) nothing piles up: the refitted ratio of a term the record does not hold
@@ -17,10 +17,10 @@ import itertools
 
 import numpy as np
 
-from fogbayes.diagnose.bartlett import BATCH_SEED, bartlett_factor, in_walk_mode
-from fogbayes.diagnose.candidates import candidates_for
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.bartlett import BATCH_SEED, bartlett_factor, in_walk_mode
+from fogbayes.loop.candidates import candidates_for
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
 
@@ -45,7 +45,7 @@ def test_the_sequential_factor_stops_when_settled_and_averages_every_batch_when_
         monkeypatch):
     # Bookkeeping, not values: seeded stand-in ratios (the real ones are the test above),
     # so each batch's seed and the average over batches can be checked exactly.
-    from fogbayes.diagnose import bartlett
+    from fogbayes.loop import bartlett
 
     seeds = []
 
@@ -72,7 +72,7 @@ def test_a_few_agreeing_ratios_cannot_settle_a_close_decision(monkeypatch):
     # Null ratios that all happen to be 0 have a sample standard error of 0; the factor's own
     # model (LR / c ~ chi^2_1, sd >= c sqrt(2)) keeps +-2 se at +-1.26 after 5 series, which
     # straddles a decision flipping at c = 1.2, and at +-0.89 after 10, which does not.
-    from fogbayes.diagnose import bartlett
+    from fogbayes.loop import bartlett
 
     calls = []
 

@@ -1,4 +1,4 @@
-"""Candidate library, terms and covariates of fogbayes.diagnose."""
+"""Candidate library, terms and covariates of fogbayes.loop."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from fogbayes.data import Metadata, Recording
-from fogbayes.diagnose.candidates import EFFECTS, candidates_for
-from fogbayes.diagnose.context import make_context, spike_flags
-from fogbayes.diagnose.covariates import block_grid
+from fogbayes.loop.candidates import EFFECTS, candidates_for
+from fogbayes.loop.context import make_context, spike_flags
+from fogbayes.preprocess.covariates import block_grid
 from fogbayes.effects.terms import Term, columns, first_order_lag
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
@@ -108,9 +108,9 @@ def test_a_step_is_searched_at_every_block_boundary():
     """Under flicker-dominated noise a step's statistic peaks over ~3 blocks: a coarse time
     grid (300 times, 170 s apart here) put this 0.2 deg/h step at 27 160 s; the truth is
     26 400 s (thermal base, paper 004's programme at 1 Hz, 5280 blocks of 10 s)."""
-    from fogbayes.diagnose import evidence as ev
-    from fogbayes.diagnose.fitting import fit_terms
-    from fogbayes.diagnose.reml import with_reml
+    from fogbayes.loop import evidence as ev
+    from fogbayes.loop.fitting import fit_terms
+    from fogbayes.loop.reml import with_reml
     from fogbayes.inference import noise_fit as nfit
     from fogbayes.simulate import simulate
 

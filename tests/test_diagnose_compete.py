@@ -1,4 +1,4 @@
-"""Ranking candidates that explain the same residual (fogbayes.diagnose.compete, loop.ranking).
+"""Ranking candidates that explain the same residual (fogbayes.loop.compete, loop.ranking).
 
 A searched parameter lets a candidate follow the noise, so the duel's D is calibrated by a
 parametric bootstrap under each hypothesis. Checked here: the bootstrap p-value is uniform
@@ -15,10 +15,10 @@ import math
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.candidates import candidates_for
-from fogbayes.diagnose.compete import bootstrap_p, duel
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.candidates import candidates_for
+from fogbayes.loop.compete import bootstrap_p, duel
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.loop import run_loop
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.core import Options, _safe_trial, _screen_all

@@ -7,8 +7,8 @@ on a piecewise-linear chamber programme (the simulator's own profile functions).
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.corners import find_corners
-from fogbayes.diagnose.covariates import (
+from fogbayes.preprocess.corners import find_corners
+from fogbayes.preprocess.covariates import (
     block_grid,
     block_temperature,
     rate_window,

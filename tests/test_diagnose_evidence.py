@@ -1,4 +1,4 @@
-"""Calibration of the screening statistics (fogbayes.diagnose.evidence) on synthetic nulls."""
+"""Calibration of the screening statistics (fogbayes.loop.evidence) on synthetic nulls."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy import special, stats
 
-from fogbayes.diagnose import evidence as ev
-from fogbayes.diagnose.candidates import Candidate
+from fogbayes.loop import evidence as ev
+from fogbayes.loop.candidates import Candidate
 from fogbayes.effects.terms import Term
 
 

@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from fogbayes.diagnose import markov
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop import markov
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.inference import noise_ssm as ns
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record

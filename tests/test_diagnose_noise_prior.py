@@ -11,9 +11,9 @@ import fogbayes.cli as cli
 import fogbayes.cli.loop  # noqa: F401  (registers the command)
 from fogbayes.support.jsonable import to_jsonable
 from fogbayes.data import save
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
-from fogbayes.diagnose.noise_prior import (
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
+from fogbayes.loop.noise_prior import (
     GM_PEAK,
     GM_PEAK_TAU,
     NoisePrior,

@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.diagnose import nullsim
+from fogbayes.loop import nullsim
 from fogbayes.inference import noise_ssm as ns
 from fogbayes.inference import noise_fit as nfit
 
@@ -101,7 +101,7 @@ def test_flicker_bank_spans_the_record():
 def test_restricted_likelihood_matches_dense_algebra(problem):
     import jax.numpy as jnp
 
-    from fogbayes.diagnose.reml import _negreml_and_grad
+    from fogbayes.loop.reml import _negreml_and_grad
 
     spec, theta, y, X, mask, w, S = problem
     o = mask > 0
@@ -125,7 +125,7 @@ def test_restricted_likelihood_matches_dense_algebra(problem):
 
 
 def test_reml_gives_the_slow_noise_back_that_ml_loses():
-    from fogbayes.diagnose.reml import reml_theta
+    from fogbayes.loop.reml import reml_theta
 
     # Random walk + white with a slow design (cubic in time): ML lets the design take the
     # walk's power -- measured over these 16 records, 8 ML fits put the log walk ratio on

@@ -1,4 +1,4 @@
-"""Placing an accepted term after the decision (fogbayes.diagnose.refine.polish*).
+"""Placing an accepted term after the decision (fogbayes.loop.refine.polish*).
 
 Step time:
 
@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
-from fogbayes.diagnose.refine import (
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
+from fogbayes.loop.refine import (
     STEP_SUBDIVISIONS,
     polish,
     polish_scale,

@@ -1,4 +1,4 @@
-"""Model-free scans of the residual (fogbayes.diagnose.scans): find planted structure only."""
+"""Model-free scans of the residual (fogbayes.loop.scans): find planted structure only."""
 
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from fogbayes.data import Metadata, Recording
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
-from fogbayes.diagnose.scans import scan_unexplained
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
+from fogbayes.loop.scans import scan_unexplained
 from fogbayes.effects.terms import Term
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.testbed import make_record
@@ -39,7 +39,7 @@ def test_nothing_unexplained_once_the_effect_is_in_the_model(cubic):
     # The temperature structure is gone once the quartic is in. Other
     # covariates may still be flagged at alpha / 6 each (this seed reports dT/dt at
     # p = 0.001 after the noise refit, 0.01 at the fixed noise model: the refitted ratio is
-    # somewhat anti-conservative, see fogbayes.diagnose.scans).
+    # somewhat anti-conservative, see fogbayes.loop.scans).
     assert ("covariate", "temperature") not in _kinds(found)
 
 
@@ -62,7 +62,7 @@ def test_a_noise_model_at_its_bound_is_reported_as_unexplained():
     """Paper 000's rate table under the default composite orders (linear scale, quadratic
     bias) leaves the scale's T x W^k products and the operating-time drift in the residual:
     the random walk goes to the top of its range. The paper's own orders leave it free."""
-    from fogbayes.diagnose.scans import noise_bound_scan
+    from fogbayes.loop.scans import noise_bound_scan
     from fogbayes.simulate import simulate
 
     ctx = make_context(simulate("paper000", seed=0, dwell=20.0).recording)

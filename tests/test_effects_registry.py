@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from fogbayes import effects
-from fogbayes.diagnose.candidates import EFFECTS, MAX_TIMES, candidates_for
-from fogbayes.diagnose.context import make_context
+from fogbayes.loop.candidates import EFFECTS, MAX_TIMES, candidates_for
+from fogbayes.loop.context import make_context
 from fogbayes.effects.terms import Term, columns
 from fogbayes.effects import Effect
 from fogbayes.loop.bases import allowed, base_terms

@@ -11,7 +11,7 @@ import pytest
 
 import fogbayes.cli as cli
 from fogbayes.data import save
-from fogbayes.diagnose.context import make_context
+from fogbayes.loop.context import make_context
 from fogbayes.loop.bases import ModelNameError, base_terms, parse_orders
 from fogbayes.loop.testbed import make_record
 

@@ -1,4 +1,4 @@
-"""Screening statistics of a grid wider than one chunk (fogbayes.diagnose.evidence._grid_stats).
+"""Screening statistics of a grid wider than one chunk (fogbayes.loop.evidence._grid_stats).
 
 One-column grid points go through the matrix products :data:`GRID_CHUNK` at a time (a step's
 grid on a long record has thousands: the whole grid held four copies of (blocks x grid) at
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbayes.diagnose import evidence as ev
+from fogbayes.loop import evidence as ev
 
 
 def test_grid_wider_than_a_chunk_matches_the_per_point_formula():

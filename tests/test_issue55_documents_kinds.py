@@ -89,7 +89,7 @@ def test_the_right_kinds_still_read(docs):
     """The same readers take the kinds they want: a fit as --params, a datasheet prior as
     --noise-prior (its cap is the sheet's RRW x looseness, the top of its 90 % range)."""
     from fogbayes.data.documents import read_calibration
-    from fogbayes.diagnose.noise_prior import read_noise_prior
+    from fogbayes.loop.noise_prior import read_noise_prior
 
     assert read_calibration(docs / "fit.json")["model"] == "bias-t"
     assert read_noise_prior(docs / "prior.json").k_max == pytest.approx(0.02 * 3.0)

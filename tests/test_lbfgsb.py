@@ -55,7 +55,7 @@ def test_runs_equal_scipys_own_minimize():
 def test_fit_noise_many_equals_one_fit_per_problem():
     from fogbayes.inference import noise_ssm as ns
     from fogbayes.inference.noise_fit import fit_noise, fit_noise_many
-    from fogbayes.diagnose.nullsim import simulate
+    from fogbayes.loop.nullsim import simulate
 
     spec = ns.make_spec(10.0, 6000.0, n_markov=1)
     n = 600

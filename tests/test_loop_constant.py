@@ -13,9 +13,9 @@ import pytest
 
 import fogbayes.cli as cli
 from fogbayes.data import save
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
-from fogbayes.diagnose.nullsim import simulate
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
+from fogbayes.loop.nullsim import simulate
 from fogbayes.inference import noise_ssm as ns
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.constant import ieee_constant, mean_variance

@@ -23,7 +23,7 @@ import math
 
 import pytest
 
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.loop import run_loop
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.metrics import block_rms
@@ -112,10 +112,10 @@ def test_a_walk_piling_up_at_zero_does_not_make_a_drift():
     # bootstrap Bartlett factor (measured 1.9) takes it back under the family-wise level.
     # Without that, the loop added `time_drift` to this record (and false terms to 3-4 of the
     # full study's 30 clean walk records, benchmarks/RESULTS_loop.md).
-    from fogbayes.diagnose import evidence as ev
-    from fogbayes.diagnose.bartlett import in_walk_mode
-    from fogbayes.diagnose.candidates import candidates_for
-    from fogbayes.diagnose.context import make_context
+    from fogbayes.loop import evidence as ev
+    from fogbayes.loop.bartlett import in_walk_mode
+    from fogbayes.loop.candidates import candidates_for
+    from fogbayes.loop.context import make_context
     from fogbayes.loop.core import Options, _screen_all
 
     rec = make_record(None, seed=4, duration=10800.0, fs=1.0, noise="walk",

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.effects.terms import Term
 from fogbayes.loop import holdout
 from fogbayes.loop.bases import base_terms

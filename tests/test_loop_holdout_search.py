@@ -8,9 +8,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.candidates import candidates_for
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.candidates import candidates_for
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.effects.terms import Term
 from fogbayes.inference import noise_ssm as ns
 from fogbayes.loop import holdout
@@ -134,7 +134,7 @@ def test_neither_alone_is_decided_by_held_out_prediction(effect, params, right):
     keeps the planted one, and the duel's row says what decided it. (A sanity check: on
     these simulated records the in-sample likelihood agrees; the measured-noise records
     where it does not are in benchmarks/RESULTS_loop_real.md.)"""
-    from fogbayes.diagnose.compete import Duel
+    from fogbayes.loop.compete import Duel
     from fogbayes.loop.ranking import by_holdout
 
     tr = make_record(effect, seed=7, duration=3 * 3600.0, fs=2.0, magnitude=2.0,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from fogbayes.data import Recording
-from fogbayes.diagnose.context import make_context
+from fogbayes.loop.context import make_context
 from fogbayes.loop.identifiable import R_WARN, collinearity_warnings
 from fogbayes.simulate import simulate
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from fogbayes.composite.compensate import monotone_bounds
-from fogbayes.diagnose.covariates import Covariates
+from fogbayes.preprocess.covariates import Covariates
 from fogbayes.effects.terms import Term
 from fogbayes.loop.compensate import rate_polynomial, solve_rate
 

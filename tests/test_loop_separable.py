@@ -9,8 +9,8 @@ import pytest
 from scipy import stats
 
 from fogbayes.data.recording import Recording
-from fogbayes.diagnose.context import make_context
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.context import make_context
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.effects.terms import Term, columns
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.separable import (POWER_Z, detectability, detectable_sizes,

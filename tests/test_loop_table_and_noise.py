@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fogbayes.diagnose.fitting import fit_terms
+from fogbayes.loop.fitting import fit_terms
 from fogbayes.loop import run_loop
 from fogbayes.loop.bases import base_terms
 from fogbayes.loop.metrics import block_rms

@@ -16,7 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.reml import _negreml_and_grad
+from fogbayes.loop.reml import _negreml_and_grad
 from fogbayes.inference import noise_kalman as nk
 from fogbayes.inference import noise_ssm as ns
 

@@ -19,7 +19,7 @@ import pytest
 
 from fogbayes.inference import noise_kalman as nk
 from fogbayes.inference import noise_ssm as ns
-from fogbayes.diagnose.nullsim import column_logliks
+from fogbayes.loop.nullsim import column_logliks
 
 
 @pytest.fixture(scope="module")
@@ -75,8 +75,8 @@ def test_held_out_scores_do_not_see_a_large_signal_in_the_model():
     signal in one of its columns added to the data and to the coefficient: the folds'
     residuals are the same numbers, and so must their densities be (the scores subtract
     the whole record's fit before forming their quadratic forms)."""
-    from fogbayes.diagnose.context import make_context
-    from fogbayes.diagnose.fitting import fit_terms
+    from fogbayes.loop.context import make_context
+    from fogbayes.loop.fitting import fit_terms
     from fogbayes.loop import holdout
     from fogbayes.loop.bases import base_terms
     from fogbayes.loop.testbed import make_record

@@ -13,7 +13,7 @@ import pytest
 def test_two_looks_never_give_a_p_value_above_one(monkeypatch):
     """The better of two screening looks is Bonferroni-corrected, min(1, 2 p): a candidate
     with p = 0.9 under both noise models keeps log10 p <= 0 (it was log10 1.8 = 0.26)."""
-    from fogbayes.diagnose.evidence import Screened
+    from fogbayes.loop.evidence import Screened
     from fogbayes.loop import core
 
     def screened(p):

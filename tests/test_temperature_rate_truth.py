@@ -8,7 +8,7 @@ its rate is, in closed form, a sum over the programme's knots t_i (slope change 
 The simulator must plant the Shupe term on exactly this rate (the physical driver: the true
 sensor temperature's derivative, not a finite difference of it). The loop sees only the
 recorded channel; its estimator (centred Savitzky-Golay slope of 60 s, kinked near the
-programme's corners, :mod:`fogbayes.diagnose.covariates`) must recover the true rate without a
+programme's corners, :mod:`fogbayes.preprocess.covariates`) must recover the true rate without a
 lag: a causal window would trail the truth on every ramp and split heating from cooling, the
 signature of thermal hysteresis.
 """
@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fogbayes.diagnose.context import make_context
+from fogbayes.loop.context import make_context
 from fogbayes.simulate import simulate
 from fogbayes.simulate.profiles import Ramp, Soak, segment_knots, thermal_profile
 

@@ -108,7 +108,7 @@ def loop(
                             fix="use e.g. --alpha 0.01")
     prior = None
     if noise_prior is not None:
-        from ..diagnose.noise_prior import read_noise_prior
+        from ..loop.noise_prior import read_noise_prior
 
         prior = read_noise_prior(noise_prior)
     rec = load_recording(rec_path, time_unit=time_unit)

@@ -2,7 +2,7 @@
 
 A :class:`Term` is data (``kind`` + ``params``); its meaning is the
 :class:`~fogbayes.effects.kinds.Kind` registered under ``kind``. :func:`columns` evaluates it on
-:class:`~fogbayes.diagnose.covariates.Covariates` at samples or blocks.
+:class:`~fogbayes.preprocess.covariates.Covariates` at samples or blocks.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 and K (deg/h^1.5) of :mod:`fogbayes.allan.model` (factors in :data:`UNIT_TABLE`; a sheet's
 "bias instability" is the ADEV floor 0.6643 B unless ``bias_instability_is="B"``), keeping the
 sheet's own values under ``datasheet``. Used by ``fogbayes allan --bayes --prior`` and
-``fogbayes loop --noise-prior`` (:mod:`fogbayes.diagnose.noise_prior`). Looseness L:
+``fogbayes loop --noise-prior`` (:mod:`fogbayes.loop.noise_prior`). Looseness L:
 log theta ~ N(log v, s^2), s = ln L / 1.6449, so P(v/L <= theta <= v L) = 0.90.
 """
 

@@ -1,7 +1,7 @@
 """The noise model's profile likelihoods (ML and REML) and their exact gradients, on the CPU.
 
 The same filter and profile as :mod:`fogbayes.inference.noise_ssm` (its ``_negll`` and
-:mod:`fogbayes.diagnose.reml`'s objective are the definitions; the tests hold these to them),
+:mod:`fogbayes.loop.reml`'s objective are the definitions; the tests hold these to them),
 with the gradient by forward sensitivities: each step carries dA/dtheta_i and dP/dtheta_i beside
 A and P. theta has 2-6 entries, so this costs a few forward passes and no reverse pass; a Numba
 loop does it in a fraction of the time XLA's scan of value and gradient takes on a small state,

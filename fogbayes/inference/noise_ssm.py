@@ -40,7 +40,7 @@ class NoiseSpec(NamedTuple):
     n_markov: number of free Gauss-Markov components; random_walk: include a random walk;
     tau_max: upper bound of a free Markov time constant (s); log_rw_max, log_mvar_max: upper
     bounds of the random walk's and of a free Markov component's log variance ratio (caps
-    from a noise prior, :mod:`fogbayes.diagnose.noise_prior`; by default the top of
+    from a noise prior, :mod:`fogbayes.loop.noise_prior`; by default the top of
     :data:`LOG_BOUNDS`).
     """
 

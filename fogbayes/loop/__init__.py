@@ -1,7 +1,10 @@
 """The closed loop: fit -> diagnose -> add the effect the evidence supports -> refit.
 
 ``run_loop(rec, model)`` returns a :class:`LoopResult` (typed steps, before/after metrics,
-``to_json()`` with the docs/DESIGN.md contract, compensated columns).
+``to_json()`` with the docs/DESIGN.md contract, compensated columns). The diagnosis, residuals
+-> findings: :mod:`.candidates`, :mod:`.evidence`, :mod:`.reml`, :mod:`.compete`,
+:mod:`.markov`, :mod:`.elpd`, :mod:`.scans`, :mod:`.refine`, :mod:`.noise_prior`; covariates
+and the block grid: :mod:`fogbayes.preprocess.covariates`.
 """
 
 __all__ = ["LoopResult", "RULE", "Rejected", "Step", "run_loop"]

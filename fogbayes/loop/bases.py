@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnose.context import Context
+from .context import Context
 from ..effects.terms import Term
 from ..errors import FogbayesError, MissingColumnError
 from ..composite.model import OrdersError, read_orders

@@ -14,8 +14,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..diagnose.context import spike_flags
-from ..diagnose.covariates import block_grid, covariates_of
+from .context import spike_flags
+from ..preprocess.covariates import block_grid, covariates_of
 from ..effects import REGISTRY
 from ..effects.terms import KINDS, Term, design, labels
 from ..data.units import convert_rate
@@ -27,7 +27,7 @@ from .noise_model import components
 RUN_EVENT_KINDS = tuple(k for k, v in KINDS.items() if v.applies == "run")
 #: Term kinds that act on the input rate (the composite family inverts them).
 OMEGA_KINDS = ("omega_poly", "omega_abs", "omega_tpoly")
-#: The block grid and dT/dt window of the loop's covariates (diagnose/context.make_context).
+#: The block grid and dT/dt window of the loop's covariates (context.make_context).
 TARGET_BLOCKS = 2500
 RATE_WINDOW_S = 60.0
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnose.context import Context
-from ..diagnose.covariates import Covariates
-from ..diagnose.fitting import ModelFit
+from .context import Context
+from ..preprocess.covariates import Covariates
+from .fitting import ModelFit
 from ..effects.kinds import kind_of
 from ..effects.terms import columns, design
 from ..errors import FogbayesError

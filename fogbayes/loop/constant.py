@@ -13,8 +13,8 @@ import numpy as np
 from scipy.signal import lfilter
 
 from ..inference.noise_kalman import system
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit
+from .context import Context
+from .fitting import ModelFit
 
 
 def intercept_column(fit: ModelFit) -> int | None:

@@ -3,9 +3,9 @@
 Fit the base model (GLS, noise by ML), choose Gauss-Markov components (:mod:`.noise_model`);
 then up to ``max_steps`` times: screen candidates, refit the ``n_refit`` best, keep those with
 p_familywise < alpha, screening p < 0.1 and d elpd_loo > 0, rank them (:mod:`.ranking`), add the
-winner (polished, :func:`fogbayes.diagnose.refine.polish`) if held-out folds agree
+winner (polished, :func:`fogbayes.loop.refine.polish`) if held-out folds agree
 (:mod:`.holdout`), re-choose the noise; finally scan for ``unexplained`` structure.
-Statistics: :mod:`fogbayes.diagnose.evidence`; rule: :data:`RULE`.
+Statistics: :mod:`fogbayes.loop.evidence`; rule: :data:`RULE`.
 """
 
 from __future__ import annotations
@@ -15,18 +15,18 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..diagnose import elpd as el
-from ..diagnose.bartlett import bartlett_factor, in_walk_mode, leaves_walk_mode
-from ..diagnose import evidence as ev
-from ..diagnose.candidates import candidates_for
+from . import elpd as el
+from .bartlett import bartlett_factor, in_walk_mode, leaves_walk_mode
+from . import evidence as ev
+from .candidates import candidates_for
 from ..effects import REGISTRY
 from ..effects.simulator_only import MarkovNoise
-from ..diagnose.context import Context, make_context
-from ..diagnose.fitting import ModelFit, fit_terms
-from ..diagnose.noise_prior import NoisePrior
-from ..diagnose.refine import polish, refine
-from ..diagnose.reml import with_reml
-from ..diagnose.scans import scan_unexplained
+from .context import Context, make_context
+from .fitting import ModelFit, fit_terms
+from .noise_prior import NoisePrior
+from .refine import polish, refine
+from .reml import with_reml
+from .scans import scan_unexplained
 from ..support.lazy import host_device
 from ..inference import noise_fit as nfit
 from ..thermal.workflow import DEFAULT_ORDERS
@@ -127,7 +127,7 @@ def _trial(ctx: Context, fit: ModelFit, wm: ev.Whitened, s: ev.Screened, n_cand:
     """Refit the model with candidate ``s`` added; its calibrated likelihood-ratio p-value.
 
     Where the refit drops the random walk of the current fit, the ratio is divided by its
-    bootstrap Bartlett factor (:mod:`fogbayes.diagnose.bartlett`; measured only when the
+    bootstrap Bartlett factor (:mod:`fogbayes.loop.bartlett`; measured only when the
     ratio would pass ``alpha`` without it), and the screening without a walk becomes the
     candidate's gate (``gate_log_p`` cleared): the refit itself chose that noise model.
     """
@@ -208,7 +208,7 @@ def _screen_all(ctx: Context, fit: ModelFit, cands, opts: Options, step: int,
     unless the candidate's own refit drops the walk (:func:`_trial`).
 
     The screening whitens and simulates under the REML noise hyperparameters of the
-    current design (:mod:`fogbayes.diagnose.reml`): ML ones leave too little slow noise
+    current design (:mod:`fogbayes.loop.reml`): ML ones leave too little slow noise
     in the null series and make slow candidates look significant too often.
     """
     seed = opts.seed + 7919 * step
@@ -284,7 +284,7 @@ def run_loop(rec, model: str = "bias-t", *, orders: str | None = None, max_steps
             choose Gauss-Markov noise components, :mod:`.noise_model`); target_blocks:
             block-grid size.
         noise_prior: a cap on the random walk from a static run
-            (:mod:`fogbayes.diagnose.noise_prior`), applied to every fit of the loop.
+            (:mod:`fogbayes.loop.noise_prior`), applied to every fit of the loop.
         declared: effect names added to the base model, in order, before the search: each a
             step with evidence ``declared`` and no test (:mod:`.declared`); ``max_steps=0``
             with them is the base model plus the declared effects.

@@ -4,10 +4,10 @@ A declared effect joins the base model before the search, as a loop step without
 searched parameter is chosen as the loop chooses a screened candidate's: among the effect's
 candidates on the current model (:meth:`fogbayes.effects.Effect.candidates`), the grid value
 with the smallest fixed-noise chi^2 p-value under the model's REML noise
-(:func:`fogbayes.diagnose.evidence.screen`, candidates ranked by their calibrated p),
-refined between its grid neighbours (:func:`~fogbayes.diagnose.refine.refine`), refitted by
+(:func:`fogbayes.loop.evidence.screen`, candidates ranked by their calibrated p),
+refined between its grid neighbours (:func:`~fogbayes.loop.refine.refine`), refitted by
 GLS with the noise by maximum likelihood and polished
-(:func:`~fogbayes.diagnose.refine.polish`). The step's evidence says ``declared`` and gives
+(:func:`~fogbayes.loop.refine.polish`). The step's evidence says ``declared`` and gives
 2 (logL_with - logL_without) for the record; no level decides whether it stays.
 """
 
@@ -15,11 +15,11 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ..diagnose import evidence as ev
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit, fit_terms
-from ..diagnose.refine import polish, refine
-from ..diagnose.reml import with_reml
+from . import evidence as ev
+from .context import Context
+from .fitting import ModelFit, fit_terms
+from .refine import polish, refine
+from .reml import with_reml
 from ..effects import REGISTRY, Effect
 from ..errors import ArgumentError
 from .bases import ALLOWED, allowed

@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit, fit_terms
-from ..diagnose.reml import with_reml
+from .context import Context
+from .fitting import ModelFit, fit_terms
+from .reml import with_reml
 from ..effects.terms import design
 from ..inference import noise_ssm as ns
 from .constant import intercept_column, noise_gram
@@ -45,7 +45,7 @@ def working(ctx: Context, fit: ModelFit) -> ModelFit:
 
 def reml_noise(ctx: Context, fit: ModelFit, cache: dict | None = None):
     """``fit.noise`` with its hyperparameters by REML on ``fit``'s design and
-    s2 = RSS / (n - p) at them (:mod:`fogbayes.diagnose.reml`): the covariance's noise."""
+    s2 = RSS / (n - p) at them (:mod:`fogbayes.loop.reml`): the covariance's noise."""
     nf = with_reml(ctx, fit, cache).noise
     mask = ctx.grid.mask
     r = ns.gls(nf.spec, nf.theta, ctx.y, fit.X, mask, ctx.grid.w)

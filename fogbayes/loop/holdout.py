@@ -15,8 +15,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit
+from .context import Context
+from .fitting import ModelFit
 from ..effects import kinds
 from ..effects.step import Step
 from ..inference import noise_ssm as ns

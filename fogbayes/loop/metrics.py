@@ -2,7 +2,7 @@
 
 ``rms``: sqrt(mean_b rbar_b^2) over 10 s blocks (restarting at gaps), deg/h; ``bias_stability``:
 paper 004 eq. 13 on 1 s windows (:func:`fogbayes.stats.stability.bias_stability`); ``elpd``:
-PSIS-LOO of the block means (:mod:`fogbayes.diagnose.elpd`).
+PSIS-LOO of the block means (:mod:`fogbayes.loop.elpd`).
 """
 
 from __future__ import annotations

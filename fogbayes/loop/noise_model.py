@@ -1,7 +1,7 @@
 """The loop's noise model, chosen apart from the deterministic effects.
 
 White + flicker bank + random walk always; Gauss-Markov components are added while
-LR = 2 [logL(M + 1) - logL(M)] has p = P(chi^2_2 > LR) < alpha (:mod:`fogbayes.diagnose.markov`)
+LR = 2 [logL(M + 1) - logL(M)] has p = P(chi^2_2 > LR) < alpha (:mod:`fogbayes.loop.markov`)
 and dropped when no longer passing; re-chosen after each accepted effect.
 :func:`best_with_fewer` lets a candidate's refit replace a component. Reported as the noise
 model, never as a step.
@@ -13,9 +13,9 @@ import math
 
 import numpy as np
 
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit
-from ..diagnose.markov import markov_log_p, markov_start, refit_markov
+from .context import Context
+from .fitting import ModelFit
+from .markov import markov_log_p, markov_start, refit_markov
 from ..effects.terms import design
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit

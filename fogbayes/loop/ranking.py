@@ -1,7 +1,7 @@
 """Which of the supported candidates is added: ranking them against each other.
 
 Supported = passes the rule alone. The best-ranked meets each other supported linear
-candidate in the duel of :mod:`fogbayes.diagnose.compete`; where both are rejected, by
+candidate in the duel of :mod:`fogbayes.loop.compete`; where both are rejected, by
 held-out prediction (:mod:`.holdout`; ``decided_by``). Indistinguishable ones go to
 ``evidence["alternatives"]``.
 """
@@ -11,9 +11,9 @@ from __future__ import annotations
 import math
 
 from .. import effects
-from ..diagnose import elpd as el
-from ..diagnose import evidence as ev
-from ..diagnose.compete import Duel, duel
+from . import elpd as el
+from . import evidence as ev
+from .compete import Duel, duel
 from . import holdout
 
 #: Family-wise screening level a linear candidate must also reach.

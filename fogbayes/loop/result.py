@@ -3,7 +3,7 @@
 ``LoopResult.to_json()``: ``schema`` ``fogbayes.loop/1``, ``model``, ``initial``/``final``
 (rms, bias_stability in deg/h, elpd in nats), ``steps``, ``unexplained``, ``noise_model``
 (:mod:`fogbayes.loop.noise_model`), ``input``, ``calibration`` (:mod:`fogbayes.loop.calibration`),
-and ``noise_prior`` under one (:mod:`fogbayes.diagnose.noise_prior`).
+and ``noise_prior`` under one (:mod:`fogbayes.loop.noise_prior`).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..support.jsonable import to_jsonable
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit
-from ..diagnose.noise_prior import NoisePrior
+from .context import Context
+from .fitting import ModelFit
+from .noise_prior import NoisePrior
 from ..effects.terms import Term
 from .metrics import Metrics
 from .noise_model import components

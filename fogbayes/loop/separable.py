@@ -12,10 +12,10 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from ..diagnose import evidence as ev
-from ..diagnose.candidates import candidates_for
-from ..diagnose.context import Context
-from ..diagnose.fitting import ModelFit
+from . import evidence as ev
+from .candidates import candidates_for
+from .context import Context
+from .fitting import ModelFit
 from ..effects.terms import columns
 from ..effects import REGISTRY
 from ..inference import noise_ssm as ns

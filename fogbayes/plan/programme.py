@@ -1,7 +1,7 @@
 """Which chamber programme lets the loop tell two thermal effects apart.
 
 In the whitened GLS space of the base model, z = mu + e, D(z) = max_a (u_a'z)^2 - max_b (u_b'z)^2
-(the duel of :mod:`fogbayes.diagnose.compete`); power = P(B rejected | A) by Monte Carlo on the
+(the duel of :mod:`fogbayes.loop.compete`); power = P(B rejected | A) by Monte Carlo on the
 span of the columns; noncentrality lambda = min_b ||(I - P_b) mu||^2 ranks programmes. Programmes
 are Soak/Ramp cycles (:mod:`fogbayes.simulate.profiles`) seen through first-order ``lags``.
 """
@@ -12,8 +12,8 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from ..diagnose.context import make_context
-from ..diagnose.evidence import whiten_columns
+from ..loop.context import make_context
+from ..loop.evidence import whiten_columns
 from ..effects import REGISTRY
 from ..effects.terms import Term
 from ..loop.bases import base_terms
@@ -201,7 +201,7 @@ def noise_for_plan(recording=None, *, allan: dict | None = None, duration: float
     without one, from Allan terms ``allan`` (N, B, K in deg/sqrt(h), deg/h, deg/h^1.5) on one
     record of ``duration`` s at ``fs`` Hz simulated under the generic test (seeded).
     """
-    from ..diagnose.fitting import fit_terms
+    from ..loop.fitting import fit_terms
 
     if recording is None:
         from ..simulate.scenarios import simulate

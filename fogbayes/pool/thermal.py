@@ -47,8 +47,8 @@ class ThermalUnit(NamedTuple):
 
 def fit_unit(rec, *, order: int = 2, t_ref: float = T_REF, name: str | None = None) -> ThermalUnit:
     """The published bias law of one recording, mapped to powers of ``T - t_ref`` (module doc)."""
-    from ..diagnose.context import make_context
-    from ..diagnose.fitting import fit_terms
+    from ..loop.context import make_context
+    from ..loop.fitting import fit_terms
     from ..loop.bases import base_terms
     from ..loop.estimator import publish, reml_noise
     from ..models.polynomial import PolyBasis, rebase_matrix

@@ -14,7 +14,7 @@ from typing import Any, Callable, NamedTuple
 import numpy as np
 
 from .. import effects
-from ..diagnose.covariates import Covariates as TermCovariates
+from ..preprocess.covariates import Covariates as TermCovariates
 from ..effects.terms import design
 from ..effects import Planted
 from ._checks import SimulationParameterError

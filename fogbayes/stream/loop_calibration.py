@@ -1,8 +1,8 @@
 """Apply a loop calibration (``fogbayes loop --json``) to a record larger than memory.
 
 The four whole-record inputs of :func:`fogbayes.loop.calibration.apply_calibration`, each built
-exactly from chunks: spike flags (:func:`fogbayes.diagnose.context.spike_flags`, median and MAD
-by :mod:`.select`), the block grid, dT/dt (:class:`fogbayes.diagnose.covariates.RateCurve` from
+exactly from chunks: spike flags (:func:`fogbayes.loop.context.spike_flags`, median and MAD
+by :mod:`.select`), the block grid, dT/dt (:class:`fogbayes.preprocess.covariates.RateCurve` from
 block sums) and filter state carried between chunks
 (:meth:`fogbayes.effects.kinds.Kind.chunk_columns`). A writing pass then subtracts the bias
 (with :mod:`.block_rms` and :mod:`.stability`) or solves for the rate
@@ -16,8 +16,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..preprocess.operating_time import operating_time_chunk
-from ..diagnose.context import MAD_TO_SIGMA, spikes_between
-from ..diagnose.covariates import (Covariates, block_index, block_step, grid_of_counts,
+from ..loop.context import MAD_TO_SIGMA, spikes_between
+from ..preprocess.covariates import (Covariates, block_index, block_step, grid_of_counts,
                                    rate_curve, rate_window)
 from ..effects.terms import chunk_columns
 from ..loop.calibration import (RATE_WINDOW_S, TARGET_BLOCKS, RangeCheck, applied_terms)
@@ -69,7 +69,7 @@ def _differences(source: RecordSource, rows: int, unit_of):
 
 
 class _Spikes:
-    """The spike flags of :func:`~fogbayes.diagnose.context.spike_flags`, chunk by chunk."""
+    """The spike flags of :func:`~fogbayes.loop.context.spike_flags`, chunk by chunk."""
 
     def __init__(self, source: RecordSource, rows: int, unit_of, n_sigma: float = 6.0):
         self.n_sigma, self.on, self.passes = n_sigma, source.n >= 5, 0

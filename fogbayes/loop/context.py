@@ -12,7 +12,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..inference.noise_ssm import NoiseSpec, make_spec
-from .covariates import BlockGrid, Covariates, block_covariates, block_grid, covariates_of
+from ..preprocess.covariates import (BlockGrid, Covariates, block_covariates, block_grid,
+                                     covariates_of)
 from ..effects.terms import Term, columns
 
 MAD_TO_SIGMA = 1.4826

@@ -97,7 +97,7 @@ def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
 
 
 def with_reml(ctx, fit, cache: dict | None = None):
-    """``fit`` (a :class:`~fogbayes.diagnose.fitting.ModelFit`) with its noise hyperparameters
+    """``fit`` (a :class:`~fogbayes.loop.fitting.ModelFit`) with its noise hyperparameters
     replaced by their REML values on the same design; cached per fit in ``cache``."""
     key = ("reml", id(fit.noise))
     if cache is not None and key in cache:

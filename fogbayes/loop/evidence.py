@@ -3,9 +3,9 @@
 With noise fixed at the current fit, the Kalman filter whitens y, X and each candidate Z_g:
 stat_g = ||Q_g' r||^2 / s2 ~ chi^2_k (Q_g a basis of M Z~_g; ``periodic``: the periodogram,
 chi^2_2). The min p over a grid is calibrated by parametric bootstrap under the REML noise
-model (:mod:`fogbayes.diagnose.reml`): P(min p <= u) = 1 - (1 - u)^M_eff; C candidates by
+model (:mod:`fogbayes.loop.reml`): P(min p <= u) = 1 - (1 - u)^M_eff; C candidates by
 Sidak, p_fw = 1 - (1 - p_c)^C. Acceptance: refitted LR gives p_fw < alpha AND PSIS-LOO ELPD
-difference > 0; survivors are ranked by :mod:`fogbayes.diagnose.compete`.
+difference > 0; survivors are ranked by :mod:`fogbayes.loop.compete`.
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ Blocks of ``dt`` s from the first sample; empty blocks are missing, never filled
 ybar_b = mean of the unflagged samples, Var_white(ybar_b) = s2 m_ref / m_b. dT/dt (deg C/min,
 first channel): centred Savitzky-Golay slope (order 2) over ``rate_window_s``
 (:func:`fogbayes.preprocess.temperature_rate.savgol_slope_grid`), spline-interpolated to the
-samples, with kinks at programme corners kept (:mod:`fogbayes.diagnose.corners`).
+samples, with kinks at programme corners kept (:mod:`fogbayes.preprocess.corners`).
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from ..errors import TooShortError
-from ..preprocess.operating_time import operating_time
-from ..preprocess.temperature_rate import savgol_slope_grid
+from .operating_time import operating_time
+from .temperature_rate import savgol_slope_grid
 from .corners import corner_reach, find_corners, replace_near_corners
 
 

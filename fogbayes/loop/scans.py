@@ -5,7 +5,7 @@ reported below alpha / (scans of its kind): ``covariate`` (Legendre P_1..P_6 of 
 LR ~ chi^2_k), ``spectral_line`` (whitened periodogram; above block Nyquist R_k = P_k ln2 / med_k),
 ``change_point`` (CUSUM of r and r^2), ``autocorrelation`` (Ljung-Box, lags 1..20),
 ``noise_model_at_bound`` (a slow variance at its upper bound,
-:data:`fogbayes.inference.noise_ssm.LOG_BOUNDS` or :mod:`fogbayes.diagnose.noise_prior`'s cap).
+:data:`fogbayes.inference.noise_ssm.LOG_BOUNDS` or :mod:`fogbayes.loop.noise_prior`'s cap).
 """
 
 from __future__ import annotations
@@ -224,7 +224,7 @@ def noise_bound_scan(fit: ModelFit, tol: float = 1e-2) -> list[dict]:
 def scan_unexplained(ctx: Context, fit: ModelFit, *, seed: int = 0, alpha: float = 0.01,
                      n_sims: int = 200, cache: dict | None = None) -> list[dict]:
     """All scans of the final residual; returns the ``unexplained`` entries (``cache``: the
-    REML noise of ``fit``, :func:`fogbayes.diagnose.reml.with_reml`)."""
+    REML noise of ``fit``, :func:`fogbayes.loop.reml.with_reml`)."""
     _, white = _sim_residuals(ctx, fit, n_sims, seed + 31, cache)
     return (noise_bound_scan(fit) + covariate_scans(ctx, fit, alpha)
             + spectral_scans(ctx, fit, white, alpha) + change_point_scans(ctx, white, alpha)

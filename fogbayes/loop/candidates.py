@@ -2,7 +2,7 @@
 
 Each candidate is a family of :class:`~fogbayes.effects.terms.Term` s, one per value of its
 searched parameter, added to the current model (nested, so a likelihood ratio compares them).
-Grids are coarse; :mod:`fogbayes.diagnose.refine` refines the value. ``markov_noise`` belongs
+Grids are coarse; :mod:`fogbayes.loop.refine` refines the value. ``markov_noise`` belongs
 to the noise model (:mod:`fogbayes.loop.noise_model`).
 """
 

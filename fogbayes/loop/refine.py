@@ -1,6 +1,6 @@
 """Refine a screened candidate's searched parameter between its grid neighbours.
 
-Maximises the fixed-noise statistic of :mod:`fogbayes.diagnose.evidence` on a fine local grid:
+Maximises the fixed-noise statistic of :mod:`fogbayes.loop.evidence` on a fine local grid:
 block boundaries (step), 25 log-spaced values (tau, r0), 41 frequencies within +-1 FFT bin.
 After the decision, :func:`polish_step` places a step to 1/20 block and :func:`polish` re-scores
 a scale (ratio 1.5 each side, up to :data:`RECENTRE_ROUNDS` re-centrings) under the refit's

@@ -139,7 +139,7 @@ def duel(ctx: Context, fit: ModelFit, a: tuple[Screened, ModelFit], b: tuple[Scr
 
     ``fit`` is the current model (without either); ``a``/``b`` are (screened, refitted
     model with the candidate added): the refits give the refined terms, and the model with
-    both gives the shared noise (REML, :mod:`fogbayes.diagnose.reml`).
+    both gives the shared noise (REML, :mod:`fogbayes.loop.reml`).
     """
     ta = _grid_terms(ctx, a[0], a[1].terms[-1])
     tb = _grid_terms(ctx, b[0], b[1].terms[-1])
