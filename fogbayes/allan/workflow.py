@@ -100,7 +100,9 @@ def _bayes_doc(data, seed: int, select: bool, sampler: dict, prior=None) -> dict
         sel = ab.select_terms(data, seed=seed, prior=prior, **sampler)
         post, rep = sel.selected, ab.reported_terms(sel)
         terms = {t: _term_doc(e, present) for t, (e, present) in rep.items()}
-        rule = f"drop a term when removing it costs < {ab.ELPD_THRESHOLD:g} elpd (PSIS-LOO)"
+        rule = (f"drop a term when removing it costs < {ab.ELPD_THRESHOLD:g} elpd (PSIS-LOO; "
+                "drop-one models with a quarter of the draws, at least 500 a chain; the selected "
+                "model with all)")
         if prior is not None:
             rule += "; terms the datasheet prior gives are kept"
         extra = {"selection": {"present": list(sel.present), "comparisons": sel.table,
