@@ -27,6 +27,9 @@ from ..support.programs import program
 #: bulk-ESS floor of the convergence rule: 200 in all (the K-R ridge mixes slowly)
 ESS_FLOOR = 200.0
 
+#: draws per chain of a reported posterior (:func:`fit_bayes`)
+NUM_SAMPLES = 2000
+
 PRIOR_SCALE = 3.0
 DELTA_SCALE = 0.05
 GOF_LEVEL = 1e-3
@@ -143,7 +146,7 @@ class AllanPosterior(NamedTuple):
 
 
 def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 500,
-              num_samples: int = 2000, num_chains: int = 2,
+              num_samples: int = NUM_SAMPLES, num_chains: int = 2,
               discrepancy: str | bool = "auto", prior=None) -> AllanPosterior:
     """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring.
 
@@ -328,7 +331,7 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
 
     prior = as_prior(prior)
     kw["prior"] = prior
-    full_samples = kw.pop("num_samples", 2000)
+    full_samples = kw.pop("num_samples", NUM_SAMPLES)
     if trial_samples is None:
         trial_samples = max(TRIAL_SAMPLES_MIN, full_samples // 4)
     trial_samples = min(trial_samples, full_samples)
