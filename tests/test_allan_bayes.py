@@ -29,6 +29,9 @@ def test_selection_keeps_the_simulated_terms_and_drops_the_ramp(selection):
     # every comparison reports LOO and WAIC differences with a standard error
     assert compared and all(np.isfinite([r["d_elpd_loo"], r["se"], r["d_elpd_waic"]]).all()
                             for r in compared)
+    # the drop-one models drew 500 a chain; the reported models (the full one and the
+    # selected one, sampled again after R was dropped) carry every draw asked for
+    assert selection.full.draws.shape[0] == selection.selected.draws.shape[0] == 2 * 1000
 
 
 def test_posterior_intervals_cover_the_truth_and_converge(selection):
