@@ -302,10 +302,10 @@ def fit_bayes(data: RateData, orders: Orders, *, seed: int, noise: str = "cells"
               chain_method: str = "threads") -> BayesFit:
     """NUTS posterior of the full-matrix composite model (module doc).
 
-    ``chain_method``: "threads" (default; the paper000 test posterior compiled in 29 s and ran
-    in 6.6 s, against 43 s and 10.2 s vectorized), "sequential" or "vectorized"
-    (:func:`fogbayes.inference.nuts.chain_sampler`). Convergence (reported, never hidden):
-    R-hat < 1.01 and bulk ESS >= 100 per chain for every noise parameter (theta is drawn exactly given them), and no divergent transition;
+    ``chain_method``: "threads" (default: each chain its own program, both cores busy),
+    "sequential" or "vectorized" (:func:`fogbayes.inference.nuts.chain_sampler`).
+    Convergence (reported, never hidden): R-hat < 1.01 and bulk ESS >= 100 per chain for
+    every noise parameter (theta is drawn exactly given them), and no divergent transition;
     ``converged`` is False otherwise.
     """
     import arviz as az

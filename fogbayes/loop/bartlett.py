@@ -46,8 +46,8 @@ def null_ratios(ctx: Context, base: ModelFit, alt: ModelFit, n_sims: int, *,
                 seed: int) -> np.ndarray:
     """Refitted ratios 2(logL_alt - logL_base) of ``n_sims`` series simulated under ``base``.
 
-    Both models are refitted on every series as :func:`~fogbayes.loop.fitting.fit_terms` would (the same starts,
-    the base fit's noise hyperparameters among them); the 2 ``n_sims`` fits share one
+    Both models are refitted on every series as :func:`~fogbayes.loop.fitting.fit_terms`
+    would (the same starts, the base fit's noise hyperparameters among them); the 2 ``n_sims`` fits share one
     block grid (:func:`fogbayes.inference.noise_fit.fit_noise_many`)."""
     nf = base.noise
     noise = simulate(nf.spec, nf.theta, nf.sigma2, ctx.grid.w, n_sims, seed=seed)

@@ -11,7 +11,8 @@ code the persistent cache then holds.
 An entry is keyed by the caller's ``key`` (everything the function closes over that is not an
 argument), the arguments' tree, shapes and dtypes, and a fingerprint of fogbayes's sources and
 of the JAX, jaxlib and NumPyro versions: any change of code makes new entries (a closure value
-left out of ``key`` is the one way to a stale program). ``FOGBAYES_JAX_CACHE=off`` turns stored programs off with the compile cache.
+left out of ``key`` is the one way to a stale program). ``FOGBAYES_JAX_CACHE=off`` turns
+stored programs off with the compile cache.
 """
 
 from __future__ import annotations
