@@ -16,8 +16,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy import stats
 
+from ..stats.tails import chi2_sf
 from .model import TERMS, AllanParams, adev
 from .data import AllanFitData, cube_root_normal, model_moments
 from .fit import AllanFit, _estimates, _mask, fit_wls
@@ -201,8 +201,12 @@ def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discr
     samples = {"logp": zs["logp"]}
     logp = np.asarray(zs["logp"])  # (chains, draws, 5)
     delta = np.exp(np.asarray(zs["log_delta"])) if discrepancy else np.zeros(logp.shape[:2])
-    log_lik = np.asarray(_pointwise_loglik(jnp.asarray(logp), jnp.asarray(delta), jmask,
-                                           data, obs))
+    # in pieces of the drop-one models' draws: one program serves every posterior of a call
+    n_draws = logp.shape[1]
+    step = TRIAL_SAMPLES_MIN if n_draws % TRIAL_SAMPLES_MIN == 0 else n_draws
+    log_lik = np.concatenate([np.asarray(_pointwise_loglik(
+        jnp.asarray(logp[:, i:i + step]), jnp.asarray(delta[:, i:i + step]), jmask, data, obs))
+        for i in range(0, n_draws, step)], axis=1)
     diag = summary(samples, group_by_chain=True)["logp"]
     on = mask > 0
     draws = np.exp(logp.reshape(-1, 5)) * mask
@@ -230,7 +234,7 @@ def _goodness_of_fit(logp_on, mask, data, obs, delta):
     mean, nu, corr = model_moments(logp, np.asarray(mask, dtype=float), data, delta)
     z, _ = cube_root_normal(np.asarray(obs), mean, nu)
     stat = float(z @ np.linalg.solve(corr, z))
-    return stat, float(stats.chi2.sf(stat, len(obs)))
+    return stat, float(chi2_sf(stat, len(obs)))
 
 
 def posterior_band(post: AllanPosterior, tau, *, ci: float = 0.9, max_draws: int = 1000):

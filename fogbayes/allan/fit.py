@@ -21,7 +21,7 @@ from scipy import optimize, special
 from .model import (
     _A_PER_P2, POWERS, TERMS, UNITS, AllanParams, params_from_coefficients,
 )
-from ..stats.edf import chi2_ppf
+from ..stats.tails import chi2_ppf
 from .data import AllanFitData, log_moments, model_moments, restrict
 
 Z90 = float(special.ndtri(0.95))

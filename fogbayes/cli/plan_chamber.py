@@ -8,7 +8,6 @@ one printed beside the baseline with the duel's predicted power for every pair.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -39,14 +38,17 @@ def _segments_file(path: Path) -> list:
     from ..simulate._checks import SimulationParameterError
     from ..simulate.profiles import as_segments
 
+    from ..data.json_file import read_json_file
+
+    fix = ('give a JSON list such as [{"soak": 20, "duration": 600}, {"ramp": 60, "rate": 2}, '
+           '...] (deg C, s, deg C/min)')
+    doc = read_json_file(path, "the --programme file", fix)
     try:
-        doc = json.loads(path.read_text())
         segs = doc["segments"] if isinstance(doc, dict) else doc
         return as_segments(segs)
-    except (OSError, ValueError, KeyError, TypeError, SimulationParameterError) as exc:
+    except (ValueError, KeyError, TypeError, SimulationParameterError) as exc:
         raise ArgumentError(f"cannot read a programme from {path}: {exc}", column="--programme",
-                            fix='give a JSON list such as [{"soak": 20, "duration": 600}, '
-                                '{"ramp": 60, "rate": 2}, ...] (deg C, s, deg C/min)') from None
+                            fix=fix) from None
 
 
 def _lines(doc: dict) -> list[str]:

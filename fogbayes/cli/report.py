@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import typer
@@ -15,15 +14,10 @@ from ._common import (QUIET_OPT, REC_ARG, TIME_UNIT_OPT, load_recording, progres
 
 def _read_json(path: Path, what: str) -> dict:
     """The JSON object at ``path``; one line naming the file if unreadable or not an object."""
+    from ..data.json_file import read_json_file
+
     fix = f"pass the file written by 'fogbayes {what} --json'"
-    try:
-        doc = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise FileFormatError(f"cannot read the {what} JSON ({exc})", file=str(path),
-                              fix=fix) from None
-    except (RecursionError, ValueError) as exc:  # nesting beyond the parser's stack; huge ints
-        raise FileFormatError(f"cannot parse the {what} JSON ({type(exc).__name__}: nested "
-                              "too deep or numbers too long)", file=str(path), fix=fix) from None
+    doc = read_json_file(path, f"the {what} JSON", fix, error=FileFormatError)
     if not isinstance(doc, dict):
         raise FileFormatError(f"the {what} JSON is a {type(doc).__name__}, not an object with "
                               "fields", file=str(path), fix=fix)

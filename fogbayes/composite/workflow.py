@@ -68,13 +68,13 @@ def _fit(data, orders, method, noise):
     from .model import pack
 
     if method == "classification":
-        from scipy import stats
+        from ..stats.tails import norm_ppf, t_ppf
 
         cf = classify_fit(data, orders=orders)
         # d comes from a fit to n_T values U1(T_i): Student-t intervals on its dof
         dof_d = int(np.isfinite(cf.U1_levels).sum()) - orders.u1 - 1
-        z = np.full(cf.cov.shape[0], stats.norm.ppf(0.95))
-        z[-(orders.u1 + 1):] = stats.t.ppf(0.95, dof_d)
+        z = np.full(cf.cov.shape[0], norm_ppf(0.95))
+        z[-(orders.u1 + 1):] = t_ppf(0.95, dof_d)
         return (np.asarray(pack(cf.params)), cf.cov, float("nan"),
                 {"model": "cells (stage 2) / white (U1)", "z90": z.tolist()}, {}, cf.scaling,
                 True)

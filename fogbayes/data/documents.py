@@ -12,7 +12,6 @@ rules :mod:`~fogbayes.data.doc_models`, bounds :mod:`~fogbayes.data.doc_rules`, 
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +19,7 @@ from ..errors import UnitError
 from .axes_doc import AXES_KEYS, AXES_SCHEMA, is_axes_document
 from .doc_kinds import CALIBRATION, FIT, refuse_other_kind
 from .doc_models import _allan, _arma, _check_schema, _scan, check_basis
+from .json_file import read_json_file
 from .doc_rules import (
     COMPENSATING,
     FIT_SCHEMA,
@@ -60,24 +60,9 @@ __all__ = ["COMPENSATING", "FIT_SCHEMA", "FitDocumentError", "agreed_unit", "che
 # -- reading ----------------------------------------------------------------------------
 def _load(path: str | Path, what: str = "fit") -> Any:
     """The parsed JSON at ``path``; a :class:`FitDocumentError` naming it if unreadable."""
-    src = str(path)
-    fix = f"pass the JSON file written by 'fogbayes {what} --json'"
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FitDocumentError("file not found", file=src,
-                               fix=f"check the path of the {what} document") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise FitDocumentError(f"cannot read the file ({type(exc).__name__}: {exc})", file=src,
-                               fix=fix) from None
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FitDocumentError(f"not valid JSON ({exc.msg} at line {exc.lineno} column "
-                               f"{exc.colno})", file=src, fix=fix) from None
-    except (RecursionError, ValueError) as exc:  # nesting beyond the parser's stack; huge ints
-        raise FitDocumentError(f"cannot be parsed ({type(exc).__name__}): nested deeper than "
-                               f"{MAX_DEPTH} levels or numbers too long", file=src) from None
+    return read_json_file(path, f"the {what} document",
+                          f"pass the JSON file written by 'fogbayes {what} --json'",
+                          error=FitDocumentError)
 
 
 def read_fit_document(path: str | Path) -> dict:

@@ -10,7 +10,6 @@ log theta ~ N(log v, s^2), s = ln L / 1.6449, so P(v/L <= theta <= v L) = 0.90.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from pathlib import Path
@@ -275,17 +274,10 @@ def validate_prior(doc, source: str = "given") -> DatasheetPrior:
 
 def read_prior(path: str | Path) -> DatasheetPrior:
     """The validated prior document at ``path``."""
-    src = str(path)
-    try:
-        doc = json.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise PriorError("the prior document does not exist", file=src, fix=HOW) from None
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as e:
-        what = f"{type(e).__name__}: {e}" if not isinstance(e, RecursionError) else \
-            "nested too deeply"
-        raise PriorError(f"the prior is not a readable JSON document ({what})", file=src,
-                         fix=HOW) from None
-    return validate_prior(doc, src)
+    from ..data.json_file import read_json_file
+
+    return validate_prior(read_json_file(path, "the prior document", HOW, error=PriorError),
+                          str(path))
 
 
 def as_prior(prior) -> DatasheetPrior | None:

@@ -14,8 +14,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from scipy import special, stats
+from scipy import special
 
+from ..stats.tails import chi2_logsf
 from ..inference import noise_ssm as ns
 from . import nullsim
 from .candidates import Candidate
@@ -108,7 +109,7 @@ def _log_sf(stat: np.ndarray, k: int) -> np.ndarray:
         return math.log(2.0) + special.log_ndtr(-np.sqrt(x))
     if k == 2:  # P(chi2_2 > x) = exp(-x / 2)
         return -0.5 * x
-    out = np.asarray(stats.chi2.logsf(x, k), dtype=float)
+    out = np.asarray(chi2_logsf(x, k), dtype=float)
     bad = ~np.isfinite(out)
     if np.any(bad):
         s, y = 0.5 * k, 0.5 * np.maximum(x[bad] if x.ndim else x, 1e-300)

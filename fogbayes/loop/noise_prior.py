@@ -11,7 +11,6 @@ assumption; reaching it is reported as ``noise_model_at_bound``.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import NamedTuple
@@ -79,19 +78,9 @@ class NoisePrior(NamedTuple):
 def read_noise_prior(path: str | Path) -> NoisePrior:
     """K_max from a ``fogbayes allan --json`` document, a datasheet prior document
     (``fogbayes prior``) or ``{"K": value}`` (see module doc)."""
-    path = Path(path)
-    try:
-        doc = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise FogbayesError("the noise prior does not exist", file=str(path),
-                            fix=HOW) from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise FogbayesError(f"the noise prior is not a JSON document ({e})", file=str(path),
-                            fix=HOW) from None
-    except (RecursionError, ValueError) as e:  # nesting beyond the parser's stack; huge ints
-        raise FogbayesError(f"the noise prior cannot be parsed ({type(e).__name__}: nested too "
-                            "deep or numbers too long)", file=str(path), fix=HOW) from None
-    return prior_from_doc(doc, source=str(path))
+    from ..data.json_file import read_json_file
+
+    return prior_from_doc(read_json_file(path, "the noise prior", HOW), source=str(path))
 
 
 def _number(value, key: str, source: str, what: str) -> float:

@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
 from scipy.ndimage import median_filter
 
+from ..stats.tails import chi2_sf
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 from . import nullsim
@@ -97,12 +97,12 @@ def covariate_scans(ctx: Context, fit: ModelFit, alpha: float) -> list[dict]:
         X1 = np.column_stack([fit.X, D])
         k = D.shape[1]
         fixed = ns.gls(spec, fit.noise.theta, ctx.y, X1, ctx.grid.mask, ctx.grid.w).loglik
-        if stats.chi2.sf(2.0 * (fixed - fit.loglik), k) >= 0.1 / len(covs):
+        if chi2_sf(2.0 * (fixed - fit.loglik), k) >= 0.1 / len(covs):
             continue  # not even suggestive at the current noise model (as the loop's gate)
         alt = nfit.fit_noise(spec, ctx.y, X1, ctx.grid.mask, ctx.grid.w,
                            extra_starts=fit.noise.theta[None] if fit.noise.theta.size else None)
         lr = max(2.0 * (alt.loglik - fit.loglik), 0.0)
-        p = float(stats.chi2.sf(lr, k))
+        p = float(chi2_sf(lr, k))
         if p < alpha / max(len(covs), 1):
             q = np.quantile(x[obs], np.linspace(0.05, 0.95, N_BINS))
             rows = np.array([np.argmin(np.abs(x - v)) for v in q])

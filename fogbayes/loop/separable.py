@@ -10,8 +10,8 @@ the effect, the unseen size and the remedy.
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
+from ..stats.tails import norm_isf, norm_ppf
 from . import evidence as ev
 from .candidates import candidates_for
 from .context import Context
@@ -24,7 +24,7 @@ from ..inference import noise_ssm as ns
 SHARE_WARN = 0.9
 #: the walk "hides" steps when it multiplies their detectable size by more than this
 WALK_WARN = 2.0
-POWER_Z = stats.norm.ppf(0.8)
+POWER_Z = norm_ppf(0.8)
 #: grid points examined per searched candidate (evenly spaced over its grid)
 MAX_GRID = 12
 
@@ -61,7 +61,7 @@ def detectable_sizes(ctx: Context, spec, theta, s2: float, X: np.ndarray, Z: np.
     nz, nzp = np.linalg.norm(Zw, axis=0), np.linalg.norm(Zp, axis=0)
     share = 1.0 - (nzp / np.maximum(nz, 1e-300)) ** 2
     peak = np.max(np.abs(Z), axis=0)
-    z = stats.norm.isf(a / 2.0) + POWER_Z
+    z = norm_isf(a / 2.0) + POWER_Z
     d = z * np.sqrt(s2) / np.maximum(nzp, 1e-300) * peak
     return share, d
 

@@ -19,8 +19,8 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy import stats
 
+from ..stats.tails import chi2_sf, norm_cdf, norm_sf
 from ..support.programs import program
 
 MU_PRIOR_SD = 10.0
@@ -229,14 +229,14 @@ def _predictive_p(yu, cu, cens, mu, spread, log_w=None, test: str = "joint") -> 
     if test == "each":
         for t in np.flatnonzero(r):
             z = (yu[t] - mu[:, t]) / np.sqrt(spread[:, t] ** 2 + cu[t, t])
-            ps.append(mean(2.0 * stats.norm.sf(np.abs(z))))
+            ps.append(mean(2.0 * norm_sf(np.abs(z))))
     elif r.any():
         A = cu[np.ix_(r, r)][None] + spread[:, r, None] * np.eye(int(r.sum())) * spread[:, None, r]
         d = yu[r][None] - mu[:, r]
         d2 = np.einsum("di,di->d", d, np.linalg.solve(A, d[..., None])[..., 0])
-        ps.append(mean(stats.chi2.sf(d2, int(r.sum()))))
+        ps.append(mean(chi2_sf(d2, int(r.sum()))))
     for t in np.flatnonzero(~r):
-        ps.append(mean(stats.norm.cdf((yu[t] - mu[:, t]) / np.sqrt(spread[:, t] ** 2 + cu[t, t]))))
+        ps.append(mean(norm_cdf((yu[t] - mu[:, t]) / np.sqrt(spread[:, t] ** 2 + cu[t, t]))))
     return min(1.0, len(ps) * min(ps))
 
 

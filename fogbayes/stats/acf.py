@@ -11,7 +11,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy import stats
+
+from .tails import norm_ppf
 
 
 class Correlogram(NamedTuple):
@@ -41,7 +42,7 @@ def acf(x, nlags: int = 40, *, alpha: float = 0.05, demean: bool = True) -> Corr
     nlags = int(min(nlags, x.size - 1))
     c = autocovariance(x, nlags, demean=demean)
     rho = c / c[0]
-    z = stats.norm.ppf(1 - alpha / 2)
+    z = norm_ppf(1 - alpha / 2)
     # cum[k] = sum_{j=1}^{k-1} rho_j^2 (0 for k = 0, 1)
     cum = np.concatenate([[0.0, 0.0], np.cumsum(rho[1:] ** 2)[:-1]])[: nlags + 1]
     band = z * np.sqrt((1 + 2 * cum) / x.size)
@@ -68,7 +69,7 @@ def pacf(x, nlags: int = 40, *, alpha: float = 0.05, demean: bool = True) -> Cor
     x = np.asarray(x, dtype=float)
     nlags = int(min(nlags, x.size // 2 - 1))
     rho = acf(x, nlags, alpha=alpha, demean=demean).values
-    z = stats.norm.ppf(1 - alpha / 2)
+    z = norm_ppf(1 - alpha / 2)
     band = np.full(nlags + 1, z / np.sqrt(x.size))
     band[0] = 0.0
     return Correlogram(np.arange(nlags + 1), durbin_levinson(rho), band, alpha)

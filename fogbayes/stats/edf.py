@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
+from .tails import chi2_ppf
+
 D_OF_KIND = {"oadev": 2, "adev": 2, "mdev": 2, "ohdev": 3, "hdev": 3}
 _EXACT_TERMS = 2_000
 _NEAR = 16  # integers taken one by one on each side of each kink of s_z
@@ -169,11 +171,6 @@ def edf_for_kind(alphas, ms, n: int, kind: str) -> np.ndarray:
     modified = kind == "mdev"
     return np.array([edf_greenhall(int(a), d, int(m), n + 1, overlapping=overlapping,
                                    modified=modified) for a, m in zip(alphas, ms)])
-
-
-def chi2_ppf(q, df):
-    """Quantile of chi^2_df: 2 P^-1(df/2, q) (scipy.special; scipy.stats costs 1 s to import)."""
-    return 2.0 * special.gammaincinv(np.asarray(df, float) / 2.0, q)
 
 
 def chi2_interval(var: np.ndarray, edf: np.ndarray, ci: float = 0.9):

@@ -11,7 +11,9 @@ offset 3/8. ESS: autocovariances by FFT, Geyer's initial positive then monotone 
 from __future__ import annotations
 
 import numpy as np
-from scipy import fft, stats
+from scipy import fft
+
+from .tails import norm_ppf
 
 
 def _split(ary: np.ndarray) -> np.ndarray:
@@ -20,8 +22,21 @@ def _split(ary: np.ndarray) -> np.ndarray:
 
 
 def _z_scale(ary: np.ndarray) -> np.ndarray:
-    rank = stats.rankdata(ary, method="average").reshape(ary.shape)
-    return stats.norm.ppf((rank - 0.375) / (ary.size + 0.25))
+    return norm_ppf((_average_ranks(ary.ravel()).reshape(ary.shape) - 0.375)
+                    / (ary.size + 0.25))
+
+
+def _average_ranks(a: np.ndarray) -> np.ndarray:
+    """1-based ranks of ``a``, ties given their mean rank (``scipy.stats.rankdata``'s
+    "average", by its own algorithm: a stable sort, runs of equal values, their bounds)."""
+    order = np.argsort(a, kind="mergesort")
+    inverse = np.empty(order.size, np.intp)
+    inverse[order] = np.arange(order.size)
+    s = a[order]
+    new = np.r_[True, s[1:] != s[:-1]]
+    run = np.cumsum(new)[inverse]
+    bounds = np.r_[np.flatnonzero(new), new.size]
+    return 0.5 * (bounds[run] + bounds[run - 1] + 1)
 
 
 def _rhat(ary: np.ndarray) -> float:

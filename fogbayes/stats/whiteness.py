@@ -10,9 +10,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy import stats
 
 from .acf import acf
+from .tails import chi2_sf, norm_ppf
 
 
 class Whiteness(NamedTuple):
@@ -51,7 +51,7 @@ def ljung_box(a, lags: int = 20, *, fitted_params: int = 0) -> tuple[float, int,
     dof = int(lags - fitted_params)
     if dof < 1:
         raise ValueError(f"Ljung-Box needs lags > fitted parameters ({lags} <= {fitted_params})")
-    return q, dof, float(stats.chi2.sf(q, dof))
+    return q, dof, float(chi2_sf(q, dof))
 
 
 def whiteness(a, x, *, p: int = 0, q: int = 0, lags: int | None = None,
@@ -65,7 +65,7 @@ def whiteness(a, x, *, p: int = 0, q: int = 0, lags: int | None = None,
     h = lags if lags is not None else max(min(20, n // 5), p + q + 1)
     qs, dof, pval = ljung_box(a, h, fitted_params=p + q)
     ra, rx = rho_a2(a), rho_ax3(a, x)
-    band = float(stats.norm.ppf(1 - alpha / 2) / np.sqrt(n))
-    bonf = float(stats.norm.ppf(1 - alpha / 6) / np.sqrt(n))  # alpha/3 per check, two-sided
+    band = float(norm_ppf(1 - alpha / 2) / np.sqrt(n))
+    bonf = float(norm_ppf(1 - alpha / 6) / np.sqrt(n))  # alpha/3 per check, two-sided
     white = bool(abs(ra) < bonf and abs(rx) < bonf and pval > alpha / 3)
     return Whiteness(ra, rx, band, qs, dof, pval, h, alpha, white)
