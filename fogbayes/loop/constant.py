@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..inference.noise_kalman import system
-from ..support.numba_cache import numba
+from ..support.first_order_filter import ar1_filter
 from .context import Context
 from .fitting import ModelFit
 
@@ -37,22 +37,10 @@ def noise_gram(spec, theta, w_white: np.ndarray, M: np.ndarray) -> np.ndarray:
         if pj > 0:
             a = (ph ** np.arange(n)) @ M
             total += pj * np.outer(a, a)
-        g = _backward_sums(float(ph), np.ascontiguousarray(M))
+        # G_s = M_{s+1} + phi G_{s+1}, G_{n-2} = M_{n-1}: a first-order filter run backwards
+        g = ar1_filter(ph, M[:0:-1])[::-1]
         total += qj * (g.T @ g)
     return total
-
-
-@numba.njit(cache=True, nogil=True)
-def _backward_sums(phi, M):  # pragma: no cover (Numba)
-    """G_s = sum_{t > s} M_t phi^(t-1-s) for s = 0 .. n-2: G_s = M_{s+1} + phi G_{s+1} from
-    G_{n-2} = M_{n-1}, a first-order filter run backwards (as ``scipy.signal.lfilter``
-    computes it, whose import costs more than this loop)."""
-    n, k = M.shape
-    G = np.zeros((max(n - 1, 0), k))
-    for s in range(n - 2, -1, -1):
-        for j in range(k):
-            G[s, j] = M[s + 1, j] + (phi * G[s + 1, j] if s < n - 2 else 0.0)
-    return G
 
 
 def mean_variance(spec, theta, w_white: np.ndarray, u: np.ndarray) -> float:

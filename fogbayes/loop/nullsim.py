@@ -1,8 +1,8 @@
 """Null simulations and grid likelihoods under :mod:`fogbayes.inference.noise_ssm`'s model.
 
 :func:`simulate` draws series from a :class:`~fogbayes.inference.noise_ssm.NoiseSpec` (each
-component an AR(1)/walk by ``lfilter``). :func:`column_logliks` gives the profile log-likelihood
-of many columns under many hyperparameters: the CPU filter of
+component an AR(1) or walk, :func:`fogbayes.support.first_order_filter.ar1_filter`). :func:`column_logliks`
+gives the profile log-likelihood of many columns under many hyperparameters: the CPU filter of
 :mod:`fogbayes.inference.noise_kalman`, then GLS per column,
 log L = -1/2 [n log(2 pi RSS / n) + sum m log F + n].
 """
@@ -14,17 +14,16 @@ from scipy.linalg import cho_solve
 
 from ..inference.noise_kalman import innovations, system
 from ..inference.noise_ssm import NoiseSpec
+from ..support.first_order_filter import ar1_filter
 
 
 def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int) -> np.ndarray:
     """Draw (n, n_sims) noise series from the model (state started from its initial law).
 
     The state is diagonal, so every component is an independent AR(1) (or random walk)
-    x_{t+1} = phi x_t + u_t, drawn by ``scipy.signal.lfilter`` over all series at once
-    (NumPy: nothing to compile), plus white noise of variance s2 w_t.
+    x_{t+1} = phi x_t + u_t, drawn over all series at once, plus white noise of variance
+    s2 w_t.
     """
-    from scipy.signal import lfilter
-
     phi, q, p0 = system(spec, theta)
     w = np.asarray(w, dtype=float)
     n = w.size
@@ -34,7 +33,7 @@ def simulate(spec: NoiseSpec, theta, sigma2: float, w, n_sims: int, *, seed: int
         u = np.sqrt(q[j]) * rng.standard_normal((n, n_sims))
         u[0] = np.sqrt(p0[j]) * rng.standard_normal(n_sims)  # x_0 from the initial law
         # x_t = phi x_{t-1} + u_{t-1} for t >= 1, x_0 = u[0]: filter the shifted innovations
-        x = lfilter([1.0], [1.0, -phi[j]], u, axis=0)
+        x = ar1_filter(phi[j], u)
         out += x
     return np.sqrt(sigma2) * out
 
