@@ -113,8 +113,11 @@ def test_converged_flag_reports_an_iteration_cap():
 
 def test_a_non_finite_gradient_stops_the_fit_unconverged():
     """A zero series has no likelihood maximum (sigma2 -> 0): its gradient is not finite, and
-    the fit stops at once and says it did not converge (it does not spin to max_iter)."""
-    X = np.stack([np.zeros(300), np.random.default_rng(0).normal(size=300)])
+    the fit stops at once and says it did not converge (it does not spin to max_iter).
+    Four series of N samples: the batch shape of test_batch_equals_single_fits, whose
+    compiled program this reuses (max_iter is an argument of it)."""
+    rng = np.random.default_rng(0)
+    X = np.stack([np.zeros(N), rng.normal(size=N), rng.normal(size=N), _sim([0.6], [-0.5], 20)])
     f = fit_arma_batch(jnp.array(X), p=1, q=1, max_iter=50)
     assert not bool(f.converged[0]) and int(f.n_iter[0]) == 1
     assert bool(f.converged[1]) and 1 < int(f.n_iter[1]) < 50

@@ -29,6 +29,9 @@ TRUTH = {
     (2, 1): ([0.5, -0.4], [-0.5]),
 }
 N, SEEDS = 1000, 40
+# one series of the length of tests/test_arma_fit.py (1 536-sample bucket): its ARMA(1,1)
+# fit is compiled there, and this file's two single-series selections share one program
+N_ONE = 1500
 
 
 def _series(order, seeds, n=N):
@@ -53,7 +56,7 @@ def test_bic_recovers_true_order_in_90_percent_of_seeds(order):
 
 
 def test_criteria_equal_statsmodels():
-    x = _series((1, 1), [99])[0]
+    x = _series((1, 1), [99], n=N_ONE)[0]
     sel = select_order(x, PAPER_CANDIDATES)
     for i, (p, q) in enumerate(sel.orders):
         with warnings.catch_warnings():
@@ -70,7 +73,7 @@ def test_masked_candidate_equals_its_own_fit():
     """A lower order fitted inside the padded shape is the same model as fitted alone."""
     from fogbayes.arma.fit import fit_arma
 
-    x = jnp.array(_series((1, 1), [5])[0])
+    x = jnp.array(_series((1, 1), [5], n=N_ONE)[0])
     sel = select_order(x, PAPER_CANDIDATES)
     i = sel.orders.index((1, 1))
     alone = fit_arma(x, p=1, q=1)
