@@ -332,7 +332,8 @@ def choose_iterations(p: FullParams, sc: Scaling, box, T_range, W_range, *,
     Wg = Wg[np.abs(Wg) > 1e-6]
     T, W = (a.ravel() for a in np.meshgrid(Tg, Wg * sc.W_scale))
     Tp = (T - sc.T_ref) / sc.T_scale
-    U = sc.U_ref + sc.U_scale * np.asarray(predict_scaled(p, Tp, W / sc.W_scale, 0.0 * T))
+    p_np = FullParams(*(np.asarray(a, dtype=float) for a in p))
+    U = sc.U_ref + sc.U_scale * predict_scaled(p_np, Tp, W / sc.W_scale, 0.0 * T)
     for k in range(max_iter + 1):
         w, _ = compensate_numpy(p, sc, box, U, T, 0.0 * T, method=method, iterations=k)
         if np.max(np.abs(w - W) / np.abs(W)) < rtol:
