@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..stats.tails import chi2_sf
+from ..support.tails import chi2_sf
 from .model import TERMS, AllanParams, adev
 from .data import AllanFitData, cube_root_normal, model_moments
 from .fit import AllanFit, _estimates, _mask, fit_wls

@@ -16,15 +16,15 @@ from typing import NamedTuple
 import math
 
 import numpy as np
-from scipy import optimize, special
+from scipy import optimize
 
 from .model import (
     _A_PER_P2, POWERS, TERMS, UNITS, AllanParams, params_from_coefficients,
 )
-from ..stats.tails import chi2_ppf
+from ..support.tails import chi2_ppf, chi2_sf, norm_ppf
 from .data import AllanFitData, log_moments, model_moments, restrict
 
-Z90 = float(special.ndtri(0.95))
+Z90 = float(norm_ppf(0.95))
 CHI2_90 = float(chi2_ppf(0.9, 1))
 GOF_LEVEL = 1e-3
 PENALTY_SD = 10.0
@@ -203,7 +203,7 @@ def fit_wls(data: AllanFitData, terms=TERMS, *, keep=None, passes: int = 3) -> A
         x, _, _ = _minimise(logp, sub, tau, target, prec, loc)
         d_chi2[i] = _chi2(x, sub, tau, target, prec) - chi2
     dof = max(1, int(keep.sum() - on.sum()))
-    gof_p = float(special.gammaincc(dof / 2.0, chi2 / 2.0))  # chi^2_dof survival
+    gof_p = float(chi2_sf(chi2, dof))
     dispersion = max(1.0, chi2 / dof) if gof_p < GOF_LEVEL else 1.0
     half = Z90 * se * np.sqrt(dispersion)  # quasi-likelihood: a misfit widens every interval
     low = np.where(d_chi2 < CHI2_90 * dispersion, 0.0, np.exp(logp - half))

@@ -68,7 +68,7 @@ def _fit(data, orders, method, noise):
     from .model import pack
 
     if method == "classification":
-        from ..stats.tails import norm_ppf, t_ppf
+        from ..support.tails import norm_ppf, t_ppf
 
         cf = classify_fit(data, orders=orders)
         # d comes from a fit to n_T values U1(T_i): Student-t intervals on its dof

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy import special
 
-from ..stats.tails import chi2_logsf
+from ..support.tails import chi2_logsf
 from ..inference import noise_ssm as ns
 from . import nullsim
 from .candidates import Candidate

@@ -15,7 +15,7 @@ import math
 import numpy as np
 from scipy.ndimage import median_filter
 
-from ..stats.tails import chi2_sf
+from ..support.tails import chi2_sf
 from ..inference import noise_ssm as ns
 from ..inference import noise_fit as nfit
 from . import nullsim

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..stats.tails import norm_isf, norm_ppf
+from ..support.tails import norm_isf, norm_ppf
 from . import evidence as ev
 from .candidates import candidates_for
 from .context import Context

@@ -15,7 +15,6 @@ from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
-from scipy import special
 
 from ..errors import FogbayesError
 from ..allan.data import MIN_TAUS, AllanFitData, log_moments, model_moments
@@ -24,6 +23,7 @@ from ..allan.model import TERMS, UNITS, AllanParams, avar, term_avar
 from ..stats.allan_cov import CovTensors, covariance_tensors
 from ..stats.allan_stencils import static_counts
 from ..stats.taus import cluster_sizes
+from ..support.tails import norm_ppf
 
 #: Longest record a plan may ask for (days); beyond it the target is refused.
 MAX_DAYS = 1000.0
@@ -56,7 +56,7 @@ class LengthPlan(NamedTuple):
 
 def z_value(level: float) -> float:
     """Two-sided normal quantile: 1.645 for 0.90."""
-    return float(special.ndtri(0.5 + 0.5 * level))
+    return float(norm_ppf(0.5 + 0.5 * level))
 
 
 def half_width(se_log, level: float = 0.9):

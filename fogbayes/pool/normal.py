@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..stats.tails import chi2_sf, norm_cdf, norm_sf
+from ..support.tails import chi2_sf, norm_cdf, norm_sf
 from ..support.programs import program
 
 MU_PRIOR_SD = 10.0

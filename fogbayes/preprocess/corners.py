@@ -10,7 +10,8 @@ fitted derivative. Block means must sit at block centres (``covariates.centred_b
 from __future__ import annotations
 
 import numpy as np
-from scipy import special
+
+from ..support.tails import chi2_isf, chi2_ppf
 
 #: family-wise probability of a false corner in a record without any
 ALPHA = 0.01
@@ -36,7 +37,7 @@ def corner_gains(Tb: np.ndarray, n: int) -> np.ndarray:
     gain = np.correlate(r, qj, mode="valid") ** 2
     total = np.correlate(r * r, np.ones(2 * n + 1), mode="valid")
     rss = total - sum(np.correlate(r, q[:, k], mode="valid") ** 2 for k in range(3)) - gain
-    s2 = float(np.median(rss)) / _chi2_median(2 * n + 1 - 4)
+    s2 = float(np.median(rss)) / float(chi2_ppf(0.5, 2 * n + 1 - 4))  # chi2 median
     if not s2 > 0.0:
         return z
     z[n:N - n] = gain / s2
@@ -47,7 +48,7 @@ def find_corners(tb: np.ndarray, Tb: np.ndarray, n: int, alpha: float = ALPHA):
     """Corners as (time, beta), beta = (a, b, c, c_jump) of the kinked fit around each."""
     z = corner_gains(Tb, n)
     N, dt = Tb.size, float(tb[1] - tb[0]) if Tb.size > 1 else 1.0
-    threshold = special.chdtri(1, alpha / max(N, 1))  # chi2_1.isf
+    threshold = chi2_isf(alpha / max(N, 1), 1)
     out = []
     for j in np.flatnonzero(z > threshold):
         if z[j] < z[max(j - n, 0):j + n + 1].max():
@@ -77,9 +78,3 @@ def replace_near_corners(corners, half: float, t: np.ndarray, rate: np.ndarray) 
         d = t[near] - k
         out[near] = beta[1] + 2.0 * beta[2] * d + 2.0 * beta[3] * np.maximum(d, 0.0)
     return out
-
-
-def _chi2_median(df: float) -> float:
-    """Median of chi^2_df, as ``scipy.stats.chi2.median`` (and ``fogbayes.stats.tails``, a
-    floor above this one) computes it; scipy.stats costs a second to import."""
-    return 2.0 * float(special.gammaincinv(df / 2.0, 0.5))

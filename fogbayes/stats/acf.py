@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .tails import norm_ppf
+from ..support.tails import norm_ppf
 
 
 class Correlogram(NamedTuple):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
-from .tails import chi2_ppf
+from ..support.tails import chi2_ppf
 
 D_OF_KIND = {"oadev": 2, "adev": 2, "mdev": 2, "ohdev": 3, "hdev": 3}
 _EXACT_TERMS = 2_000

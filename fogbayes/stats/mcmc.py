@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import fft
 
-from .tails import norm_ppf
+from ..support.tails import norm_ppf
 
 
 def _split(ary: np.ndarray) -> np.ndarray:

@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .acf import acf
-from .tails import chi2_sf, norm_ppf
+from ..support.tails import chi2_sf, norm_ppf
 
 
 class Whiteness(NamedTuple):

@@ -1,4 +1,4 @@
-"""fogbayes.stats.tails and the MCMC ranks give scipy.stats' numbers to the last bit (the
+"""fogbayes.support.tails and the MCMC ranks give scipy.stats' numbers to the last bit (the
 reference: scipy.stats itself, which fogbayes no longer imports on its everyday paths)."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from fogbayes.stats import tails
+from fogbayes.support import tails
 from fogbayes.stats.mcmc import _average_ranks
 
 X = np.array([0.0, 1e-3, 0.1, 1.0, 2.37, 5.0, 30.0, 700.0, 1500.0, 3000.0])
