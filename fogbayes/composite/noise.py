@@ -62,8 +62,7 @@ def cell_stats(X: np.ndarray, y: np.ndarray, cell: np.ndarray, t_abs: np.ndarray
                      d / spacing, int(y.size), R)
 
 
-@numba.njit(cache=True, nogil=True)
-def precision_bands(gaps, rho):  # pragma: no cover (Numba)
+def precision_bands(gaps: np.ndarray, rho: float):
     """Tridiagonal Q = R^-1 of an AR(1) at the cell times, and log|R|.
 
     With r_k = rho ** gap_k between cells k and k+1: x_1 ~ N(0, 1) and
@@ -71,18 +70,12 @@ def precision_bands(gaps, rho):  # pragma: no cover (Numba)
     (from the right neighbour) + 1 / (1 - r_{k-1}^2) - 1 (from the left), off-diagonal
     -r_k / (1 - r_k^2), and log|R| = sum_k log(1 - r_k^2).
     """
-    K = gaps.size + 1
-    diag = np.ones(K)
-    off = np.empty(K - 1)
-    logdet = 0.0
-    for k in range(K - 1):
-        r = rho ** gaps[k] if rho > 0 else 0.0
-        w = 1.0 / (1.0 - r * r)
-        diag[k] += r * r * w
-        diag[k + 1] += w - 1.0
-        off[k] = -r * w
-        logdet += math.log1p(-r * r)
-    return diag, off, logdet
+    r = rho ** gaps if rho > 0 else np.zeros_like(gaps)
+    w = 1.0 / (1.0 - r * r)
+    diag = np.ones(gaps.size + 1)
+    diag[:-1] += r * r * w
+    diag[1:] += w - 1.0
+    return diag, -r * w, float(np.sum(np.log1p(-r * r)))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -143,42 +136,27 @@ def _sigma_inverse(N, diag, off, lam, small_lam, V):  # pragma: no cover (Numba)
 
 def _solve(st: CellStats, lam: float, rho: float):
     """GLS pieces for given (lam, rho) (module doc): theta, G, RSS, REML, dof."""
-    theta, G, rss, reml = _gls(st.WXX, st.WXy, st.R, st.Xb, st.yb, st.N, st.gaps, float(lam),
-                               float(rho), st.n)
-    return theta, G, rss, reml, st.n - st.WXX.shape[0]
-
-
-@numba.njit(cache=True, nogil=True)
-def _gls(WXX, WXy, R, Xb, yb, N, gaps, lam, rho, n):  # pragma: no cover (Numba)
-    """:func:`_solve` in one compiled call (the REML search evaluates it ~140 times a fit:
-    NumPy's per-call overhead was 10x the arithmetic). Sigma^-1 [Xb yb] in one pass; RSS
-    from the residuals, not q - h'theta: on a rate table fitted to 1e-3 of its spread that
-    difference loses ~9 digits and the REML surface turned noisy (5e-3 nats in second
-    differences on the paper000 table; 8e-8 from the residuals)."""
-    K, p = Xb.shape
-    diag, off, logdetR = precision_bands(gaps, rho)
-    small_lam = lam * np.median(N) <= 1.0
-    S = np.empty((K, p + 1))
-    S[:, :p] = Xb
-    S[:, p] = yb
-    logdetQN = _sigma_inverse(N, diag, off, lam, small_lam, S)
-    SX = np.ascontiguousarray(S[:, :p])
-    Sy = np.ascontiguousarray(S[:, p])
-    G = WXX + Xb.T @ SX
-    h = WXy + Xb.T @ Sy
+    p = st.WXX.shape[0]
+    diag, off, logdetR = precision_bands(st.gaps, float(rho))
+    small_lam = bool(lam * np.median(st.N) <= 1.0)  # which Woodbury form (_sigma_inverse)
+    S = np.column_stack([st.Xb, st.yb])  # Sigma^-1 [Xb yb], one pass, in place
+    logdetQN = _sigma_inverse(st.N, diag, off, float(lam), small_lam, S)
+    G = st.WXX + st.Xb.T @ S[:, :p]
+    h = st.WXy + st.Xb.T @ S[:, p]
     theta = np.linalg.solve(G, h)
-    # within-cell residual, through the triangular factor: |.|^2 + R_yy^2
-    within = np.ascontiguousarray(R[:p, p]) - np.ascontiguousarray(R[:p, :p]) @ theta
-    rb = yb - Xb @ theta
-    V = np.empty((K, 1))
-    V[:, 0] = rb
-    _sigma_inverse(N, diag, off, lam, small_lam, V)
-    rss = max(within @ within + R[p, p] ** 2 + rb @ V.ravel(), 1e-300)
+    # RSS from the residuals, not q - h'theta: on a rate table fitted to 1e-3 of its
+    # spread, that difference loses ~9 digits and the REML surface turned noisy (5e-3 nats in
+    # second differences on the paper000 table; 8e-8 from the residuals)
+    within = st.R[:p, p] - st.R[:p, :p] @ theta  # within-cell residual: |.|^2 + R_yy^2
+    rb = st.yb - st.Xb @ theta
+    V = rb[:, None].copy()
+    _sigma_inverse(st.N, diag, off, float(lam), small_lam, V)
+    rss = max(float(within @ within + st.R[p, p] ** 2 + rb @ V[:, 0]), 1e-300)
     logdetV = logdetR + logdetQN  # log|V| = log|N| + log|Sigma| (module doc)
     logdetG = np.linalg.slogdet(G)[1]
-    dof = n - p
-    reml = -0.5 * (dof * math.log(rss / dof) + logdetV + logdetG)
-    return theta, G, rss, reml
+    dof = st.n - p
+    reml = -0.5 * (dof * np.log(rss / dof) + logdetV + logdetG)
+    return theta, G, rss, reml, dof
 
 
 def fit_cell_noise(st: CellStats, *, lam0: float = 1e-2, rho0: float = 0.5) -> CellNoiseFit:
