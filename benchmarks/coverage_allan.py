@@ -46,6 +46,8 @@ def simulate(mix: str, n: int, seed: int) -> tuple[np.ndarray, float, dict]:
 
 #: sampler sizes passed to the posterior (empty: the library's defaults); --warmup, --draws
 SAMPLER: dict = {}
+#: select_terms' own options (--trial-warmup)
+SELECT: dict = {}
 
 
 def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
@@ -73,7 +75,7 @@ def one(mix: str, n: int, seed: int, methods: tuple[str, ...]) -> dict:
             out[method + "_seconds"] = time.perf_counter() - t0
             continue
         elif method == "select":
-            sel = ab.select_terms(data, seed=seed, **SAMPLER)
+            sel = ab.select_terms(data, seed=seed, **SAMPLER, **SELECT)
             rep = ab.reported_terms(sel)
             out["select_present"] = list(sel.present)
             fit = sel.selected.fit._replace(terms={t: e for t, (e, _) in rep.items()})
@@ -133,7 +135,11 @@ def main():
     ap.add_argument("--out", default=None, help="also write the raw rows as JSON")
     ap.add_argument("--warmup", type=int, default=None, help="posterior warm-up steps")
     ap.add_argument("--draws", type=int, default=None, help="posterior draws per chain")
+    ap.add_argument("--trial-warmup", type=int, default=None,
+                    help="warm-up steps of select's drop-one models")
     args = ap.parse_args()
+    if args.trial_warmup is not None:
+        SELECT["trial_warmup"] = args.trial_warmup
     if args.warmup is not None:
         SAMPLER["num_warmup"] = args.warmup
     if args.draws is not None:

@@ -312,7 +312,8 @@ def _compare(scores_a, post_b: AllanPosterior) -> dict:
 
 
 def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
-                 trial_samples: int | None = None, **kw) -> TermSelection:
+                 trial_samples: int | None = None, trial_warmup: int | None = None,
+                 **kw) -> TermSelection:
     """Backward elimination by PSIS-LOO.
 
     From the model with all ``terms``: fit each model that lacks one candidate term, drop the
@@ -323,7 +324,10 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
     a datasheet ``prior`` gives (the sheet says they exist; every fit uses the prior).
 
     The drop-one models are compared, not reported: they draw ``trial_samples`` per chain
-    (default a quarter of ``num_samples``, at least TRIAL_SAMPLES_MIN): the elpd
+    (default a quarter of ``num_samples``, at least TRIAL_SAMPLES_MIN) after ``trial_warmup``
+    warm-up steps (default the reported models' ``num_warmup``; 200 chose the same terms as
+    500 on all 60 records of benchmarks/RESULTS_allan.md's selection check, in 0.9-1.07x the
+    time, so the default stays): the elpd
     differences' Monte Carlo sd stays well below ELPD_THRESHOLD (a mix-A record of
     benchmarks/coverage_allan.py, six sampler seeds: 0.28-0.50 at 500 draws, 0.18-0.47 at
     2000). The full model and the selected one are sampled at ``num_samples``: theirs are
@@ -339,6 +343,7 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
     if trial_samples is None:
         trial_samples = max(TRIAL_SAMPLES_MIN, full_samples // 4)
     trial_samples = min(trial_samples, full_samples)
+    trial_kw = kw if trial_warmup is None else dict(kw, num_warmup=trial_warmup)
     sheet_terms = () if prior is None else tuple(prior.terms)
     current = [t for t in TERMS if t in terms]
     post = fit_bayes(data, current, seed=seed, num_samples=full_samples, **kw)
@@ -352,7 +357,7 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
             if not cands:
                 break
             trials = {t: fit_bayes(data, [u for u in current if u != t], seed=seed,
-                                   num_samples=trial_samples, **kw) for t in cands}
+                                   num_samples=trial_samples, **trial_kw) for t in cands}
             scores = _loo(post)  # the current model's, once for every candidate
             costs = {t: _compare(scores, trials[t]) for t in cands}
             worst = min(cands, key=lambda t: costs[t]["d_elpd_loo"])
