@@ -39,6 +39,33 @@ def test_conditional_cell_likelihood_matches_dense_gaussian_conditioning():
             np.testing.assert_allclose(ll[s, k], ref, rtol=1e-10)
 
 
+def test_cell_likelihood_of_several_samples_per_cell_matches_dense_block_conditioning():
+    """Cells of 2-4 samples, their samples interleaved in time order (the within-cell sums
+    gather them): each cell's term is log p(y_cell | every other sample) of the dense
+    N(X theta, s2 (I + lam Z R Z')), R over the cells' mean times."""
+    rng = np.random.default_rng(1)
+    K, p = 5, 2
+    cell = rng.permutation(np.repeat(np.arange(K), rng.integers(2, 5, K)))
+    n = cell.size
+    X, y = rng.standard_normal((n, p)), rng.standard_normal(n)
+    t_abs = np.sort(rng.uniform(0, 10, n))
+    theta = rng.standard_normal((2, p))
+    s2, lam, rho = 0.4, 1.3, 0.6
+    ll = _cell_pointwise(X, y, cell, t_abs, lam, rho, theta, s2)
+    tau = np.bincount(cell, t_abs) / np.bincount(cell)
+    spacing = np.median(np.diff(np.sort(tau)))
+    R = rho ** (np.abs(tau[:, None] - tau[None, :]) / spacing)
+    Z = np.eye(K)[cell]
+    V = s2 * (np.eye(n) + lam * Z @ R @ Z.T)
+    for s in range(2):
+        r = y - X @ theta[s]
+        for k in range(K):
+            i, o = np.flatnonzero(cell == k), np.flatnonzero(cell != k)
+            A = V[np.ix_(i, o)] @ np.linalg.inv(V[np.ix_(o, o)])
+            ref = multivariate_normal(A @ r[o], V[np.ix_(i, i)] - A @ V[np.ix_(o, i)]).logpdf(r[i])
+            np.testing.assert_allclose(ll[s, k], ref, rtol=1e-9)
+
+
 def test_sigma_d_rule_is_the_papers_argmin():
     sel = select_orders(_data(5), criterion="sigma_d")
     s1 = min(sel.scores["sigma_s1"], key=sel.scores["sigma_s1"].get)
