@@ -58,9 +58,9 @@ def test_the_truth_lies_within_what_the_population_states(pooled):
     10 on log mu and the unresolved terms' likelihood left flat below once put B at 1.9e-5
     deg/h [7.7e-11, 0.0096] and K at 5.4e-5 [7.8e-11, 0.027]: both below the truth."""
     pool, err, _ = pooled
-    # Such pools often end with the sampler's diagnostics outside the rule (13 of the 20 of
-    # benchmarks/RESULTS_pool.md): then the command must say so, and what it states must
-    # still hold the truth.
+    # Such pools can end with the sampler's diagnostics outside the rule (2 of the 20 of
+    # benchmarks/RESULTS_pool.md, one divergence each): then the command must say so, and
+    # what it states must still hold the truth.
     assert pool["converged"] or "converge" in err.lower(), err
     # the records are short enough that units leave B or K unresolved: the path under test
     assert sum(not u["terms"][t]["single"]["resolved"] for u in pool["units"]
