@@ -115,9 +115,11 @@ def test_missing_tail_leaves_filter_smoother_and_likelihood_of_the_series(phi, t
 
 
 def test_one_step_prediction_of_nearby_lengths_compiles_one_filter():
+    from fogbayes.arma.filter import _innovations
+
     x = np.random.default_rng(5).normal(size=1000)
-    kalman_filter.clear_cache()
+    _innovations.clear_cache()
     for n in (900, 960, 1000):  # one bucket: 1024 (that of test_arma_whiteness.py's filters)
         one = one_step_prediction([0.5], [0.2], 1.0, x[:n])
         assert one.residual.shape == (n,)
-    assert kalman_filter._cache_size() == 1
+    assert _innovations._cache_size() == 1

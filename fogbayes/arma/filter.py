@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import ArgumentError
 from ..models.buckets import held
 from ..models.statespace import arma_state_space, kalman_filter, rts_smoother
+from ..support.programs import program
 
 
 class OneStep(NamedTuple):
@@ -42,19 +43,32 @@ class Denoised(NamedTuple):
     signal_sigma2: float
 
 
-def _filter(ss, x: np.ndarray, obs_var=0.0):
-    """The Kalman filter of x, run inside ``bucket_length(n)`` samples (the tail missing)
-    so that nearby lengths share one compiled filter; outputs cover the whole array."""
-    xb, n = held(x)
-    return kalman_filter(ss, xb, obs_var, n_valid=n)
+# The state space is built inside the compiled programs: built eagerly, each of its
+# operations was a program of its own, traced, lowered and compiled in every new process
+# (~40 of them, seconds of a `fogbayes arma` call).
+# The series is held in ``bucket_length(n)`` samples (the tail missing), so that nearby
+# lengths share one program; outputs cover the whole array.
+
+@program
+def _innovations(phi, theta, sigma2, xb, n):
+    f = kalman_filter(arma_state_space(phi, theta, sigma2), xb, 0.0, n_valid=n)
+    return f.innov, f.innov_var
+
+
+@program
+def _filtered_and_smoothed(phi, theta, sigma2, xb, n, obs_var):
+    ss = arma_state_space(phi, theta, sigma2)
+    filt = kalman_filter(ss, xb, obs_var, n_valid=n)
+    return filt.filt_mean[:, 0], rts_smoother(ss, filt).mean[:, 0]
 
 
 def one_step_prediction(phi, theta, sigma2, x) -> OneStep:
     """Exact one-step-ahead prediction and innovations of x under ARMA(phi, theta, sigma2)."""
     x = np.asarray(x, dtype=float)
-    f = _filter(arma_state_space(phi, theta, sigma2), x)
-    n = x.shape[0]
-    v, F = np.asarray(f.innov)[:n], np.asarray(f.innov_var)[:n]
+    xb, n = held(x)
+    innov, innov_var = _innovations(jnp.asarray(phi, dtype=float),
+                                    jnp.asarray(theta, dtype=float), float(sigma2), xb, n)
+    v, F = np.asarray(innov)[:n], np.asarray(innov_var)[:n]
     return OneStep(x - v, v, F, v / np.sqrt(F / float(sigma2)))
 
 
@@ -126,10 +140,10 @@ def denoise(phi, theta, sigma2, x, *, noise_var: float | None = None) -> Denoise
     if s2 == 0.0:
         z = np.zeros(n)
         return Denoised(z, z, xn, xn, h, sphi, sth, 0.0)
-    ss = arma_state_space(jnp.asarray(sphi), jnp.asarray(sth), s2)
     # the smoother runs back over the missing tail unchanged (no gain there), so from
     # t = n - 1 down it is the smoother of x_1..x_n
-    filt = _filter(ss, xn, obs_var=h)
-    sm = rts_smoother(ss, filt)
-    fs, ms = np.asarray(filt.filt_mean[:n, 0]), np.asarray(sm.mean[:n, 0])
+    xb, _ = held(xn)
+    fs, ms = _filtered_and_smoothed(jnp.asarray(sphi, dtype=float), jnp.asarray(sth, dtype=float),
+                                    float(s2), xb, n, float(h))
+    fs, ms = np.asarray(fs)[:n], np.asarray(ms)[:n]
     return Denoised(fs, ms, xn - ms, xn - fs, h, sphi, sth, s2)

@@ -11,7 +11,6 @@ from functools import partial
 from typing import NamedTuple
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..models.buckets import held
@@ -44,15 +43,15 @@ class OrderSelection(NamedTuple):
 
     orders: tuple[tuple[int, int], ...]
     fits: ArmaFit
-    aic: Array
-    bic: Array
+    aic: np.ndarray
+    bic: np.ndarray
     n: int
 
-    def best(self, criterion: str = "bic") -> Array:
+    def best(self, criterion: str = "bic") -> np.ndarray:
         """Index (per series) of the candidate with the smallest criterion."""
         if criterion not in ("aic", "bic"):
             raise ValueError(f"criterion must be 'aic' or 'bic', got {criterion!r}")
-        return jnp.argmin(self.aic if criterion == "aic" else self.bic, axis=-1)
+        return np.argmin(self.aic if criterion == "aic" else self.bic, axis=-1)
 
     def selected(self, criterion: str = "bic") -> tuple[int, int]:
         """(p, q) chosen for a single series."""
@@ -66,11 +65,11 @@ class OrderSelection(NamedTuple):
                 float(f.sigma2[index]))
 
 
-def _masks(orders, P: int, Q: int) -> tuple[Array, Array]:
+def _masks(orders, P: int, Q: int) -> tuple[np.ndarray, np.ndarray]:
     # len(orders) rows even when P or Q is 0 (reshape(-1, 0) cannot infer the row count)
     mp = np.array([[1.0 if i < p else 0.0 for i in range(P)] for p, _ in orders]).reshape(len(orders), P)
     mq = np.array([[1.0 if j < q else 0.0 for j in range(Q)] for _, q in orders]).reshape(len(orders), Q)
-    return jnp.asarray(mp), jnp.asarray(mq)
+    return mp, mq
 
 
 @partial(program, static_argnames=("P", "Q", "batched"))
@@ -89,19 +88,22 @@ def select_order(x, candidates=PAPER_CANDIDATES, *, max_iter: int = 200) -> Orde
         raise ValueError("candidates must name at least one (p, q) order")
     P, Q = max(p for p, _ in orders), max(q for _, q in orders)
     mp, mq = _masks(orders, P, Q)
-    x = jnp.asarray(x, dtype=float)
+    x = np.asarray(x, dtype=float)
     n = x.shape[-1]
     # held in bucket_length(n) samples: one compiled program serves nearby lengths
     m = default_ar_order(n, P, Q)
-    x = jnp.asarray(held(x)[0])
+    x = held(x)[0]
     # Candidates run one after another through one compiled function (the masks are
     # arguments): vmapping them would make every candidate wait for the slowest to
     # converge (measured 4x more likelihood evaluations on the p, q <= 3 grid).
     per = [_fit_one_order(x, n, m, mp[i], mq[i], max_iter, P=P, Q=Q, batched=x.ndim > 1)
            for i in range(len(orders))]
+    # the glue in NumPy: an eager JAX operation is a program to trace and compile in
+    # every new process
     axis = 0 if x.ndim == 1 else 1
-    fits = jax.tree_util.tree_map(lambda *a: jnp.stack(a, axis=axis), *per)
-    k = jnp.array([p + q + 1 for p, q in orders], dtype=float)
+    fits = jax.tree_util.tree_map(lambda *a: np.stack([np.asarray(v) for v in a], axis=axis),
+                                  *per)
+    k = np.array([p + q + 1 for p, q in orders], dtype=float)
     aic = -2.0 * fits.loglik + 2.0 * k
     bic = -2.0 * fits.loglik + k * np.log(n)
     return OrderSelection(orders, fits, aic, bic, n)
