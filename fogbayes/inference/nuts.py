@@ -125,9 +125,18 @@ def in_threads(one_chain):
 
     import numpy as np
 
+    def host(a):
+        # each chain's slice taken in NumPy: slicing a JAX array is an eager operation,
+        # a program traced and compiled in every new process (typed keys stay as they are)
+        a_dtype = getattr(a, "dtype", None)
+        if a_dtype is not None and jax.dtypes.issubdtype(a_dtype, jax.dtypes.prng_key):
+            return a
+        return np.asarray(a)
+
     def run(keys, z0, *args):
         n = len(keys)
-        starts = [jax.tree_util.tree_map(lambda a, i=i: a[i], z0) for i in range(n)]
+        keys = host(keys)
+        starts = [jax.tree_util.tree_map(lambda a, i=i: host(a)[i], z0) for i in range(n)]
 
         def one(i):
             return jax.block_until_ready(one_chain(keys[i], starts[i], *args))
