@@ -79,3 +79,26 @@ def test_a_damaged_entry_is_exported_again(tmp_path):
 def test_nothing_is_stored_with_the_compile_cache_off(tmp_path):
     assert _run(tmp_path, 3, "a", FOGBAYES_JAX_CACHE="off") == {"traces": 1, "same": True}
     assert _entries(tmp_path) == []
+
+
+def test_compiler_options_reach_the_stored_and_the_traced_program(tmp_path, monkeypatch):
+    """``compiler_options`` (the pool's chains compile with LLVM's optimisations off) are
+    handed to XLA whether the program is stored or, with the cache off, traced: an option
+    XLA does not know is refused either way, a known one gives the function's numbers."""
+    import jax.numpy as jnp
+    import numpy as np
+    import pytest
+
+    from fogbayes.support.stored import stored, stored_folder
+
+    for cache in ("on", "off"):
+        monkeypatch.setenv("FOGBAYES_CACHE_DIR", str(tmp_path / cache))
+        monkeypatch.setenv("FOGBAYES_JAX_CACHE", cache)
+        assert (stored_folder() is None) == (cache == "off")
+        bad = stored(lambda x: 2.0 * x, ("test_stored_programs", "bad", cache),
+                     compiler_options={"xla_no_such_option": 1})
+        with pytest.raises(Exception, match="xla_no_such_option"):
+            bad(jnp.ones(3))
+        good = stored(lambda x: 2.0 * x, ("test_stored_programs", "level 0", cache),
+                      compiler_options={"xla_backend_optimization_level": 0})
+        np.testing.assert_array_equal(np.asarray(good(jnp.arange(3.0))), [0.0, 2.0, 4.0])

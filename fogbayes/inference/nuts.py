@@ -16,7 +16,8 @@ from ..support.programs import program
 def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                   target_accept_prob: float = 0.8, dense_mass=True,
                   chain_method: str = "vectorized", postprocess=None, on_trace=None,
-                  jit: bool = True, laplace_mass: bool = True, store_key: tuple | None = None):
+                  jit: bool = True, laplace_mass: bool = True, store_key: tuple | None = None,
+                  compiler_options: dict | None = None):
     """``f(keys (C,), z0 (C, ...), *args) -> (draws (C, num_samples, ...), divergences)``.
 
     ``potential_fn_gen(*args)`` returns the negative log density of the unconstrained
@@ -35,7 +36,8 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     NumPyro's identity). ``store_key`` (threads only): a tuple naming what
     ``potential_fn_gen`` and ``postprocess`` compute; the chain's program is then kept on
     disk once traced (:func:`fogbayes.support.stored.stored`), so that a new process skips
-    tracing it.
+    tracing it. ``compiler_options``: XLA's, for the chains' program (``jax.jit``'s argument, e.g.
+    ``{"xla_backend_optimization_level": 0}``: :mod:`fogbayes.pool.normal`).
     """
     from numpyro.infer.hmc import hmc
 
@@ -73,15 +75,16 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
             return jax.lax.map(lambda kz: chain(kz[0], kz[1], *args), (keys, z0))
         return jax.vmap(chain, in_axes=(0, 0) + (None,) * len(args))(keys, z0, *args)
 
+    options = {} if compiler_options is None else {"compiler_options": compiler_options}
     if chain_method == "threads":  # the device choice is per thread: made in each
         if store_key is None:
-            return in_threads(on_host(program(chain)))
+            return in_threads(on_host(program(chain, **options)))
         from ..support.stored import stored
 
         key = (store_key, num_warmup, num_samples, target_accept_prob, repr(dense_mass),
                laplace_mass)
-        return in_threads(on_host(stored(chain, key)))
-    return on_host(program(run)) if jit else run
+        return in_threads(on_host(stored(chain, key, **options)))
+    return on_host(program(run, **options)) if jit else run
 
 
 #: curvatures below this (per unit of the unconstrained parameter) are not trusted: such

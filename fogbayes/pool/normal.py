@@ -158,6 +158,13 @@ def _potential(y, cov, cens, ceil, w, centre, mu_sd, log_scale):
 TARGET_ACCEPT, TARGET_ACCEPT_CENSORED, WARMUP_CENSORED = 0.98, 0.995, 1000
 
 
+#: XLA compiles the pool's chains without LLVM's optimisations: a small potential whose
+#: time goes to the tree builder's control flow, not arithmetic. `fogbayes pool` on the four
+#: 1 h units of benchmarks/RESULTS_interactive.md, alternating warm calls: 10.6-12.9 s against
+#: 16.4-18.5 s. The Allan posterior, arithmetic-bound, ran 2.6x slower so: it keeps the default.
+COMPILER_OPTIONS = {"xla_backend_optimization_level": 0}
+
+
 @functools.lru_cache(maxsize=8)
 def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
     """NUTS chains over (eta, log s, z), drawn as (mu, log s, z) (:func:`_constrained`,
@@ -169,7 +176,7 @@ def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
 
     return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=target,
                          chain_method="threads", postprocess=_constrained,
-                         store_key=("pool.normal",))
+                         store_key=("pool.normal",), compiler_options=COMPILER_OPTIONS)
 
 
 def _start(y, cov, num_chains, rng):

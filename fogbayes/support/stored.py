@@ -58,16 +58,19 @@ def stored_folder() -> Path | None:
     return None if folder is None else Path(folder) / "exported"
 
 
-def stored(fun, key: tuple, *, platform: str = "cpu"):
+def stored(fun, key: tuple, *, platform: str = "cpu", compiler_options: dict | None = None):
     """``fun`` as a compiled function whose traced program is kept on disk (module doc).
 
     ``key``: a tuple of plain values naming everything ``fun`` depends on besides its
     arguments (a sampler's lengths, target acceptance, model variant). ``platform``: the one
     the stored module runs on (the samplers run on the CPU:
-    :func:`fogbayes.inference.nuts.on_host`).
+    :func:`fogbayes.inference.nuts.on_host`). ``compiler_options``: XLA's, for compiling it
+    (``jax.jit``'s argument; the stored module does not depend on them, JAX's compile cache
+    keys by them).
     Where the cache is off, or an argument tree cannot be serialised, it is ``program(fun)``.
     """
-    traced = program(fun)
+    options = {} if compiler_options is None else {"compiler_options": compiler_options}
+    traced = program(fun, **options)
     calls: dict = {}
     lock = threading.Lock()  # chains in threads make their first calls together: one export
 
@@ -81,13 +84,14 @@ def stored(fun, key: tuple, *, platform: str = "cpu"):
             with lock:
                 fast = calls.get(sig)
                 if fast is None:
-                    fast = calls[sig] = _load_or_export(traced, key, sig, tree, specs, platform)
+                    fast = calls[sig] = _load_or_export(traced, key, sig, tree, specs, platform,
+                                                        options)
         return fast(*args)
 
     return call
 
 
-def _load_or_export(traced, key, sig, tree, specs, platform):
+def _load_or_export(traced, key, sig, tree, specs, platform, options):
     """The stored program for these arguments: read, or exported and written; ``traced``
     itself where nothing can be stored."""
     folder = stored_folder()
@@ -111,7 +115,7 @@ def _load_or_export(traced, key, sig, tree, specs, platform):
         except Exception:  # a tree JAX cannot serialise (a custom node): trace each time
             return traced
         _write_atomically(path, blob)
-    return program(exported.call)
+    return program(exported.call, **options)
 
 
 def _write_atomically(path: Path, blob: bytes) -> None:
