@@ -3,7 +3,7 @@
 Exact for u linear between samples: L_k = a_k L_{k-1} + (1 - c_k) u_k + (c_k - a_k) u_{k-1},
 a_k = exp(-h_k / tau), c_k = tau (1 - a_k) / h_k. Uniform steps by
 :func:`~fogbayes.support.first_order_filter.first_order_filter` (``scipy.signal.lfilter``'s
-numbers), otherwise an associative scan (JAX).
+numbers), otherwise the same recursion with each step's own coefficients.
 """
 
 from __future__ import annotations
@@ -11,17 +11,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..support.first_order_filter import first_order_filter
+from ..support.numba_cache import numba
 
 
-def _scan(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """y_k = a_k y_{k-1} + b_k (y_{-1} = 0) by an associative scan."""
-    import jax
-    import jax.numpy as jnp
-
-    def comb(x, y):
-        return y[0] * x[0], y[0] * x[1] + y[1]
-
-    return np.asarray(jax.lax.associative_scan(comb, (jnp.asarray(a), jnp.asarray(b)))[1])
+@numba.njit(cache=True, nogil=True)
+def _recursion(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover (Numba)
+    """y_k = a_k y_{k-1} + b_k (y_{-1} = 0), in order; one compiled loop for every length."""
+    y = np.empty(b.size)
+    acc = 0.0
+    for k in range(b.size):
+        acc = a[k] * acc + b[k]
+        y[k] = acc
+    return y
 
 
 def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
@@ -40,4 +41,4 @@ def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
     a = np.exp(-h / tau)
     c = -tau * np.expm1(-h / tau) / h
     b = (1.0 - c) * u[1:] + (c - a) * u[:-1]
-    return _scan(np.concatenate([[0.0], a]), np.concatenate([[y0], b]))
+    return _recursion(np.concatenate([[0.0], a]), np.concatenate([[y0], b]))
