@@ -211,7 +211,8 @@ def _signal_state(pid: int) -> str:
 def _kill_while_writing(args, watch: Path, mark: str | None, sig=signal.SIGTERM,
                         timeout: float = 60.0):
     """Start the command, signal it once a temporary file whose name holds ``mark``
-    appears under ``watch``; returns (exit code, stderr, whether it was signalled)."""
+    appears under ``watch`` (and is still there 50 ms later: the slow writer's own);
+    returns (exit code, stderr, whether it was signalled)."""
     if mark is None:
         cmd = [sys.executable, "-m", "fogbayes", *map(str, args)]
     else:
@@ -220,8 +221,15 @@ def _kill_while_writing(args, watch: Path, mark: str | None, sig=signal.SIGTERM,
     signalled, deadline = False, time.monotonic() + timeout
     try:
         while time.monotonic() < deadline and proc.poll() is None:
-            if any(is_temp_name(p.name) and (mark is None or mark in p.name)
-                   for p in watch.iterdir()):
+            seen = [p for p in watch.iterdir()
+                    if is_temp_name(p.name) and (mark is None or mark in p.name)]
+            # the slow write holds its temporary; the CLI's check that an output can be
+            # written makes one with the same name and removes it at once (a signal sent
+            # then lands before the work started: a rare false failure, seen 1 in 4 suites)
+            if seen and mark is not None:
+                time.sleep(0.05)
+                seen = [p for p in seen if p.exists()]
+            if seen:
                 proc.send_signal(sig)
                 signalled = True
                 break
