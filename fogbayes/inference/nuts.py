@@ -36,8 +36,8 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     NumPyro's identity). ``store_key`` (threads only): a tuple naming what
     ``potential_fn_gen`` and ``postprocess`` compute; the chain's program is then kept on
     disk once traced (:func:`fogbayes.support.stored.stored`), so that a new process skips
-    tracing it. ``compiler_options``: XLA's, for the chains' program (``jax.jit``'s argument, e.g.
-    ``{"xla_backend_optimization_level": 0}``: :mod:`fogbayes.pool.normal`).
+    tracing it. ``compiler_options``: XLA's, for the chains' program (``jax.jit``'s argument;
+    None: XLA's defaults; the pool's: :data:`fogbayes.pool.normal.COMPILER_OPTIONS`).
     """
     from numpyro.infer.hmc import hmc
 
@@ -75,16 +75,15 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
             return jax.lax.map(lambda kz: chain(kz[0], kz[1], *args), (keys, z0))
         return jax.vmap(chain, in_axes=(0, 0) + (None,) * len(args))(keys, z0, *args)
 
-    options = {} if compiler_options is None else {"compiler_options": compiler_options}
     if chain_method == "threads":  # the device choice is per thread: made in each
         if store_key is None:
-            return in_threads(on_host(program(chain, **options)))
+            return in_threads(on_host(program(chain, compiler_options=compiler_options)))
         from ..support.stored import stored
 
         key = (store_key, num_warmup, num_samples, target_accept_prob, repr(dense_mass),
                laplace_mass)
-        return in_threads(on_host(stored(chain, key, **options)))
-    return on_host(program(run, **options)) if jit else run
+        return in_threads(on_host(stored(chain, key, compiler_options=compiler_options)))
+    return on_host(program(run, compiler_options=compiler_options)) if jit else run
 
 
 #: curvatures below this (per unit of the unconstrained parameter) are not trusted: such

@@ -69,8 +69,7 @@ def stored(fun, key: tuple, *, platform: str = "cpu", compiler_options: dict | N
     keys by them).
     Where the cache is off, or an argument tree cannot be serialised, it is ``program(fun)``.
     """
-    options = {} if compiler_options is None else {"compiler_options": compiler_options}
-    traced = program(fun, **options)
+    traced = program(fun, compiler_options=compiler_options)
     calls: dict = {}
     lock = threading.Lock()  # chains in threads make their first calls together: one export
 
@@ -85,13 +84,13 @@ def stored(fun, key: tuple, *, platform: str = "cpu", compiler_options: dict | N
                 fast = calls.get(sig)
                 if fast is None:
                     fast = calls[sig] = _load_or_export(traced, key, sig, tree, specs, platform,
-                                                        options)
+                                                        compiler_options)
         return fast(*args)
 
     return call
 
 
-def _load_or_export(traced, key, sig, tree, specs, platform, options):
+def _load_or_export(traced, key, sig, tree, specs, platform, compiler_options):
     """The stored program for these arguments: read, or exported and written; ``traced``
     itself where nothing can be stored."""
     folder = stored_folder()
@@ -115,7 +114,7 @@ def _load_or_export(traced, key, sig, tree, specs, platform, options):
         except Exception:  # a tree JAX cannot serialise (a custom node): trace each time
             return traced
         _write_atomically(path, blob)
-    return program(exported.call, **options)
+    return program(exported.call, compiler_options=compiler_options)
 
 
 def _write_atomically(path: Path, blob: bytes) -> None:
