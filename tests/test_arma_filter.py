@@ -123,3 +123,37 @@ def test_one_step_prediction_of_nearby_lengths_compiles_one_filter():
         one = one_step_prediction([0.5], [0.2], 1.0, x[:n])
         assert one.residual.shape == (n,)
     assert _innovations._cache_size() == 1
+
+
+def test_the_one_filter_on_a_diagonal_system_with_missing_samples_equals_dense_conditioning():
+    """The noise model's system (two first-order states, a random walk from 0, observed
+    through their sum, time-varying white variance, samples missing by the mask) on two
+    columns: innovations and variances equal the dense Gaussian predictions from the observed
+    past (covariance built from the model's recursion, not the filter's)."""
+    from fogbayes.models.statespace import linear_gaussian_filter
+
+    rng = np.random.default_rng(7)
+    n = 40
+    phi = np.array([0.3, 0.9, 1.0])
+    q = np.array([0.5, 0.2, 0.05])
+    p0 = np.array([0.5 / (1 - 0.09), 0.2 / (1 - 0.81), 0.0])
+    h = rng.uniform(0.5, 2.0, n)
+    mask = (rng.uniform(size=n) > 0.2).astype(float)
+    Y = rng.normal(size=(n, 2)) * mask[:, None]
+    P, cov_states = np.diag(p0), []
+    for _ in range(n):
+        cov_states.append(P)
+        P = np.diag(phi) @ P @ np.diag(phi) + np.diag(q)
+    S = np.empty((n, n))
+    for t in range(n):
+        for s in range(t, n):
+            S[t, s] = S[s, t] = (phi ** (s - t)) @ cov_states[t] @ np.ones(3)
+    S += np.diag(h)
+    V, F = linear_gaussian_filter(lambda M: jnp.asarray(phi)[:, None] * M, jnp.diag(q),
+                                  jnp.ones(3), jnp.diag(p0), jnp.asarray(Y), jnp.asarray(h),
+                                  jnp.asarray(mask), states=False)
+    for t in range(n):
+        past = np.flatnonzero(mask[:t] > 0)
+        w = linalg.solve(S[np.ix_(past, past)], S[past, t]) if past.size else np.zeros(0)
+        np.testing.assert_allclose(np.asarray(V)[t], Y[t] - w @ Y[past], rtol=1e-9, atol=1e-9)
+        assert float(F[t]) == pytest.approx(S[t, t] - S[t, past] @ w, rel=1e-9)

@@ -24,7 +24,6 @@ from . import noise_kalman
 # imported at first use: the fits run on the CPU filter (noise_kalman); JAX for its definitions
 jax = lazy_module("jax")
 jnp = lazy_module("jax.numpy")
-lax = lazy_module("jax.lax")
 Array = "jax.Array"  # annotations only
 
 BANK_PER_DECADE = 2.0
@@ -144,24 +143,13 @@ def system(spec: NoiseSpec, p: NoiseParams) -> tuple[Array, Array, Array]:
 
 
 def _filter(phi, q, p0, Y, mask, w):
-    """Kalman filter of every column of Y (n, C) with shared gains -> innovations V, F."""
-    d, C = phi.shape[0], Y.shape[1]
+    """Innovations V (n, C) and relative variances F (n,) of every column of Y: the package's
+    Kalman filter (:func:`fogbayes.models.statespace.linear_gaussian_filter`) on the diagonal
+    system, observed through the sum of the states."""
+    from ..models.statespace import linear_gaussian_filter  # JAX: imported at first use
 
-    def step(carry, inp):
-        A, P = carry
-        y, m, wt = inp
-        Pz = P.sum(axis=1)
-        F = Pz.sum() + wt
-        v = y - A.sum(axis=0)
-        k = Pz / F
-        Af = A + m * jnp.outer(k, v)
-        Pf = P - m * jnp.outer(k, Pz)
-        Pn = phi[:, None] * Pf * phi[None, :] + jnp.diag(q)
-        return (phi[:, None] * Af, 0.5 * (Pn + Pn.T)), (v, F)
-
-    init = (jnp.zeros((d, C)), jnp.diag(p0))
-    _, (V, F) = lax.scan(step, init, (Y, mask, w), unroll=UNROLL)
-    return V, F
+    return linear_gaussian_filter(lambda M: phi[:, None] * M, jnp.diag(q), jnp.ones_like(phi),
+                                  jnp.diag(p0), Y, w, mask, states=False, unroll=UNROLL)
 
 
 class GLSResult(NamedTuple):

@@ -1,6 +1,11 @@
-"""State-space form of an ARMA(p, q) process and the Kalman filter / RTS smoother on it (pure JAX).
+"""The package's Kalman filter (pure JAX), and the ARMA(p, q) state space and RTS smoother on it.
 
-Harvey's form, r = max(p, q + 1): alpha_{t+1} = T alpha_t + R a_{t+1}, T = [phi | I; 0],
+:func:`linear_gaussian_filter` runs y_t = z'alpha_t + e_t, e_t ~ N(0, h_t), alpha_{t+1} = T alpha_t
++ u_t, u_t ~ N(0, Q), on one or several columns that share the gains. The ARMA models
+(:func:`kalman_filter`) and the loop's noise model (:mod:`fogbayes.inference.noise_ssm`) are its
+two systems; the CPU fits run the noise model's Numba backend, held to it by the tests.
+
+ARMA in Harvey's form, r = max(p, q + 1): alpha_{t+1} = T alpha_t + R a_{t+1}, T = [phi | I; 0],
 R = [1, -theta_1, ..., -theta_{r-1}], y_t = alpha_t[0] + e_t, e_t ~ N(0, h) (h = 0: exact ARMA).
 Start N(0, P0), P0 = T P0 T' + sigma2 RR' solved via (I - T (x) T) vec P0 = vec Q.
 """
@@ -91,14 +96,44 @@ def stationary_cov(T: Array, Q: Array) -> Array:
     return 0.5 * (P + P.T)
 
 
+def linear_gaussian_filter(transition, Q: Array, z: Array, P0: Array, Y: Array, h: Array,
+                           mask: Array | None = None, *, states: bool = True, unroll: int = 8):
+    """Kalman filter of every column of Y with shared gains, started at N(0, P0).
+
+    ``transition(M)`` = T M for M (r, ...); Q (r, r), z (r,), P0 (r, r); Y (n,) or (n, C);
+    h (n,) observation variances (inf: a missing sample, no update, F_t = inf); ``mask`` (n,)
+    optional 0/1 weights of the update (0: a missing sample whose F_t stays finite).
+    Per step: v_t = y_t - z'a_t, F_t = z'P_t z + h_t, k_t = P_t z / F_t,
+    a_t|t = a_t + m_t k_t v_t, P_t|t = P_t - m_t k_t (P_t z)',
+    a_{t+1} = T a_t|t, P_{t+1} = T P_t|t T' + Q (both covariances symmetrised).
+    Returns (a_t, P_t, a_t|t, P_t|t, v_t, F_t) stacked over t, or (v, F) with ``states=False``.
+    """
+    Y = jnp.asarray(Y, dtype=float)
+    m = jnp.ones(Y.shape[0]) if mask is None else jnp.asarray(mask, dtype=float)
+
+    def step(carry, inp):
+        a, P = carry
+        yt, ht, mt = inp
+        Pz = P @ z
+        F = z @ Pz + ht
+        v = yt - z @ a
+        k = Pz / F
+        af = a + mt * (k[:, None] * v if Y.ndim > 1 else k * v)
+        Pf = P - mt * jnp.outer(k, Pz)
+        Pf = 0.5 * (Pf + Pf.T)
+        Pn = transition(transition(Pf).T) + Q
+        out = (a, P, af, Pf, v, F) if states else (v, F)
+        return (transition(af), 0.5 * (Pn + Pn.T)), out
+
+    a0 = jnp.zeros(z.shape + Y.shape[1:])
+    return lax.scan(step, (a0, P0), (Y, jnp.asarray(h, dtype=float), m), unroll=unroll)[1]
+
+
 @partial(program, static_argnames=("unroll",))
 def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, n_valid=None,
                   unroll: int = 8) -> FilterResult:
-    """Kalman filter for y_t = alpha_t[0] + e_t, e_t ~ N(0, obs_var), started stationary.
-
-    v_t = y_t - a_t[0], F_t = P_t[0,0] + h, K_t = P_t[:, 0] / F_t,
-    a_t|t = a_t + K_t v_t, P_t|t = P_t - K_t P_t[0, :],
-    a_{t+1} = T a_t|t, P_{t+1} = T P_t|t T' + sigma2 R R'.
+    """:func:`linear_gaussian_filter` of the ARMA system, y_t = alpha_t[0] + e_t,
+    e_t ~ N(0, obs_var), started stationary, and the log-likelihood sum log N(v_t; 0, F_t).
 
     ``n_valid`` (traced): only y_1..y_n are observed; later samples are missing, which is
     h = inf there (F_t = inf, K_t = 0: no update; their F_t is returned as inf and they add
@@ -109,29 +144,13 @@ def kalman_filter(ss: ArmaStateSpace, y: Array, obs_var=0.0, *, n_valid=None,
     T, R, sigma2 = ss
     phi_full = T[:, 0]
     Q = sigma2 * jnp.outer(R, R)
-    P0 = stationary_cov(T, Q)
-    h = jnp.asarray(obs_var, dtype=float)
     y = jnp.asarray(y, dtype=float)
-
-    def step(carry, inp):
-        a, P = carry
-        yt, ht = inp if n_valid is not None else (inp, h)
-        F = P[0, 0] + ht
-        v = yt - a[0]
-        k = P[:, 0] / F
-        af = a + k * v
-        Pf = P - jnp.outer(k, P[0])
-        Pf = 0.5 * (Pf + Pf.T)
-        an = apply_T(phi_full, af)
-        Pn = apply_T(phi_full, apply_T(phi_full, Pf).T) + Q
-        return (an, Pn), (a, P, af, Pf, v, F)
-
-    a0 = jnp.zeros(T.shape[0])
-    if n_valid is None:
-        inputs = y
-    else:  # a missing sample: infinite observation variance
-        inputs = (y, jnp.where(jnp.arange(y.shape[0]) < n_valid, h, jnp.inf))
-    _, (a, P, af, Pf, v, F) = lax.scan(step, (a0, P0), inputs, unroll=unroll)
+    h = jnp.broadcast_to(jnp.asarray(obs_var, dtype=float), y.shape)
+    if n_valid is not None:  # a missing sample: infinite observation variance
+        h = jnp.where(jnp.arange(y.shape[0]) < n_valid, h, jnp.inf)
+    z = jnp.zeros(T.shape[0]).at[0].set(1.0)
+    a, P, af, Pf, v, F = linear_gaussian_filter(
+        lambda M: apply_T(phi_full, M), Q, z, stationary_cov(T, Q), y, h, unroll=unroll)
     ll = -0.5 * (jnp.log(2 * jnp.pi * F) + v * v / F)
     if n_valid is not None:
         ll = jnp.where(jnp.arange(y.shape[0]) < n_valid, ll, 0.0)
