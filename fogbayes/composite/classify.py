@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax.numpy as jnp
 import numpy as np
 
 from .cells import CellSummary, RateData, summarise_cells
@@ -118,8 +117,8 @@ def classify_fit(data: RateData, *, orders: Orders | None = None,
     rd = yd - Xd @ dd
     cov_d = float(rd @ rd) / dof_d * np.linalg.inv(Xd.T @ Xd)
     nm = (orders.s1 + 1) * (orders.s2 + 1)
-    params = FullParams(jnp.asarray(fa.theta[:nm].reshape(orders.s1 + 1, orders.s2 + 1)),
-                        jnp.asarray(fa.theta[nm:]), jnp.asarray(dd))
+    params = FullParams(fa.theta[:nm].reshape(orders.s1 + 1, orders.s2 + 1), fa.theta[nm:],
+                        np.asarray(dd))
     cov = np.zeros((na + dd.size, na + dd.size))
     cov[:na, :na], cov[na:, na:] = fa.cov, cov_d
     return ClassificationFit(A, B, U1, s_u1, s_s1, s_s2, orders, params, sc, cov,

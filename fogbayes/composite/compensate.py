@@ -11,16 +11,20 @@ from __future__ import annotations
 from functools import partial
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..errors import FogbayesError
+from ..support.lazy import jax_on_cpu, lazy_module
 from ..support.programs import program
 from .model import (RESID_ABS, RESID_REL, FullParams, ProductParams, Scaling, _horner,
                     product_to_full)
 
 METHODS = ("halley", "newton", "paper")
+
+
+# imported at first use: on a CPU calls go to the compiled loop (compensate_loop)
+jax = lazy_module("jax")
+jnp = lazy_module("jax.numpy")
 
 
 class CompensationResult(NamedTuple):
@@ -350,7 +354,8 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
     ``rtol`` = 1e-9 (1e-7 %) is far below any gyro's noise and the done-when's 1e-4 %, and
     for paper 000's coefficients gives Halley 2 iterations, the paper's own count.
     ``host``: calls go to the compiled CPU loop (True), to XLA on JAX's default device
-    (False), or to the loop where that device is the CPU (None). Streams pass True: their
+    (False), or to the loop where that device is the CPU or JAX was never started (None:
+    :func:`fogbayes.support.lazy.jax_on_cpu`). Streams pass True: their
     chunks start and end in host memory, where a GPU only adds two transfers a chunk.
     """
     if isinstance(p, ProductParams):
@@ -374,7 +379,7 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
     stream_fn = program(lambda U, T, t: _rate(consts, sc_f, box, U, T, t, **kw),
                         donate_argnums=0)
     loop = None
-    if host or (host is None and jax.default_backend() == "cpu"):  # one pass at memory speed
+    if host or (host is None and jax_on_cpu()):  # one pass at memory speed
         from .compensate_loop import compile_loop
 
         loop = compile_loop(consts, sc_f, box, **kw)

@@ -12,16 +12,19 @@ import re
 from functools import partial
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from ..errors import FogbayesError, TooShortError
-from ..inference.lsq import lbfgs_scan
+from ..support.lazy import lazy_module
 from ..support.programs import program
 from .cells import RateData
 from .model import (FullParams, Orders, ProductParams, Scaling, design_matrix,
                     full_to_product, n_params, pack, product_to_full, unpack)
+
+
+# imported at first use: the closed-form fits (the workflow's default) need no JAX
+jax = lazy_module("jax")
+jnp = lazy_module("jax.numpy")
 
 
 class LsqFit(NamedTuple):
@@ -141,7 +144,7 @@ def fit_joint(data: RateData, orders: Orders, *, scaling: Scaling | None = None,
 
         cn = fit_cell_noise(cell_stats(X, y, data.cell, data.time))
         rms = float(np.sqrt(np.mean((y - X @ cn.theta) ** 2))) * sc.U_scale
-        return LsqFit(unpack(jnp.asarray(cn.theta), orders), sc, orders, cn.cov,
+        return LsqFit(unpack(np.asarray(cn.theta), orders), sc, orders, cn.cov,
                       float(np.sqrt(cn.s2)) * sc.U_scale, np.zeros(0), cn.dof, int(y.size), rms,
                       bool(np.all(np.isfinite(cn.cov))), cn.lam, cn.rho)
     theta = np.linalg.lstsq(X, y, rcond=None)[0]
@@ -158,7 +161,7 @@ def fit_joint(data: RateData, orders: Orders, *, scaling: Scaling | None = None,
     rms = float(np.sqrt(np.mean((y - X @ theta) ** 2))) * sc.U_scale
     ok = bool(np.all(np.isfinite(theta)) and np.all(np.isfinite(cov)) and
               (p_ar == 0 or np.all(np.abs(np.roots(np.r_[1.0, -phi])) < 1)))
-    return LsqFit(unpack(jnp.asarray(theta), orders), sc, orders, cov,
+    return LsqFit(unpack(np.asarray(theta), orders), sc, orders, cov,
                   float(np.sqrt(s2)) * sc.U_scale, phi, int(dof), int(y.size), rms, ok)
 
 
@@ -181,6 +184,8 @@ def _lbfgs(v0, X, y, *, orders: Orders, form: str, steps: int):
     def loss(v):
         r = y - X @ _vector_to_theta(v, orders, form)
         return 0.5 * jnp.mean(r * r)
+
+    from ..inference.lsq import lbfgs_scan  # optax: imported with JAX
 
     v, trace = lbfgs_scan(loss, v0, steps=steps)
     return v, loss(v), jnp.linalg.norm(jax.grad(loss)(v)), trace

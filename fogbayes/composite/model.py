@@ -164,7 +164,8 @@ def scale_inputs(sc: Scaling, T, W, t):
 
 def product_to_full(p: ProductParams) -> FullParams:
     """M' = a' outer [1, b'] (the rank-1 scale factor as a full matrix)."""
-    b = jnp.concatenate([jnp.ones(p.b.shape[:-1] + (1,), p.a.dtype), p.b], axis=-1)
+    xp = namespace(p.a, p.b)
+    b = xp.concatenate([xp.ones(p.b.shape[:-1] + (1,), p.a.dtype), p.b], axis=-1)
     return FullParams(p.a[..., :, None] * b[..., None, :], p.c, p.d)
 
 
@@ -218,7 +219,8 @@ def n_params(orders: Orders) -> int:
 def pack(p: FullParams):
     """FullParams -> flat theta (M row-major, then c, then d); leading batch axes kept."""
     lead = p.M.shape[:-2]
-    return jnp.concatenate([p.M.reshape(lead + (-1,)), p.c, p.d], axis=-1)
+    xp = namespace(p.M, p.c, p.d)
+    return xp.concatenate([p.M.reshape(lead + (-1,)), p.c, p.d], axis=-1)
 
 
 def unpack(theta, orders: Orders) -> FullParams:
@@ -275,9 +277,9 @@ def to_raw(p: FullParams | ProductParams, sc: Scaling) -> RawCoefficients:
     if isinstance(p, ProductParams):
         p = product_to_full(p)
     orders = orders_of(p)
-    theta = np.asarray(pack(FullParams(*(jnp.asarray(v) for v in p))), dtype=float)
+    theta = pack(FullParams(*(np.asarray(v, dtype=float) for v in p)))
     raw = theta @ raw_map(orders, sc).T + raw_offset(orders, sc)
-    return RawCoefficients(*(np.asarray(v) for v in unpack(jnp.asarray(raw), orders)))
+    return RawCoefficients(*unpack(raw, orders))
 
 
 def from_raw(raw: RawCoefficients, sc: Scaling) -> FullParams:

@@ -61,10 +61,6 @@ def _unflatten(vec, orders: Orders) -> dict:
 
 def _fit(data, orders, method, noise):
     """(theta scaled, cov, sigma, noise document, extra document, scaling, converged)."""
-    import jax
-    import jax.numpy as jnp
-
-    from .fit import _vector_to_theta
     from .model import pack
 
     if method == "classification":
@@ -79,6 +75,11 @@ def _fit(data, orders, method, noise):
                 {"model": "cells (stage 2) / white (U1)", "z90": z.tolist()}, {}, cf.scaling,
                 True)
     if method == "product":
+        import jax
+        import jax.numpy as jnp
+
+        from .fit import _vector_to_theta
+
         pf = fit_optax(data, orders, form="product")
         full = product_to_full(pf.params)
         theta = np.asarray(pack(FullParams(*(jnp.asarray(v) for v in full))))
@@ -194,13 +195,11 @@ def fit_recording(rec, *, model: str = "composite", orders=None, bayes: bool = F
 
 
 def _params_from_doc(fit: dict) -> tuple[FullParams, Scaling, Orders]:
-    import jax.numpy as jnp
-
     try:
         o = fit["orders"]
         orders = Orders(int(o["s1"]), int(o["s2"]), int(o["u0"]), int(o["u1"]))
         sc = Scaling(**{k: float(v) for k, v in fit["params"]["scaling"].items()})
-        theta = jnp.asarray(np.asarray(fit["params"]["scaled"], float))
+        theta = np.asarray(fit["params"]["scaled"], float)
     except (KeyError, TypeError, ValueError) as exc:
         raise OrdersError(f"the composite fit document is incomplete ({exc!r})", column="params",
                           fix="pass the JSON written by 'fogbayes fit --model composite'") from None
