@@ -22,8 +22,10 @@ Every part of a record is drawn from its seed (:func:`draw`):
 
 Seeds of the ``dev`` set (0, 1, ...) were used while developing the loop; a report set is
 run once: ``report`` (1 000 000 + k) for the loop of 2026-12-05, ``report2``
-(2 000 000 + k) for the loop with the cubic base and GLS less the walk. Rows are appended
-to ``benchmarks/study_random_<set>.jsonl`` as they finish (resumable, parallel).
+(2 000 000 + k) for the loop with the cubic base and GLS less the walk; ``dev2``
+(3 000 000 + k) is a second development set (the held-out check's noise model was studied
+on it). Rows are appended to ``benchmarks/study_random_<set>.jsonl`` as they finish
+(resumable, parallel).
 
 Per record, errors are the RMS of the 10 s block means of (fitted deterministic model -
 true deterministic part), **mean kept** (the calibration's constant counts):
@@ -57,7 +59,7 @@ sys.path.insert(0, os.path.dirname(HERE))
 import bench_loop_real as blr  # noqa: E402  (measured noise)
 
 FS = 1.0
-SETS = {"dev": 0, "report": 1_000_000, "report2": 2_000_000}
+SETS = {"dev": 0, "report": 1_000_000, "report2": 2_000_000, "dev2": 3_000_000}
 FAMILIES = ("temperature_rate", "thermal_hysteresis", "step", "time_drift", "thermal_lag",
             "temperature_gradient", "temperature_order")
 CLEAN_SHARE = 0.25
@@ -208,9 +210,22 @@ def run_case(case: dict) -> dict:
                err_oracle_gls_walk=_err(rec.time, oracle_gls_det, true_det, flag),
                err_base=_err(rec.time, base_det, true_det, flag),
                loop_mean=float(np.mean(np.asarray(res.compensated["output"])[~flag])),
-               warned=said, warnings=list(res.warnings), stop=res.stop.reason)
+               warned=said, warnings=list(res.warnings), stop=res.stop.reason,
+               **_why_stopped(res))
     row["material"] = bool(fam) and row["err_oracle"] < 0.5 * row["err_base"]
     return row
+
+
+def _why_stopped(res) -> dict:
+    """The gates' numbers: the last step's refitted candidates (calibrated p, ratio, Bartlett
+    factor) and screening, and the supported terms the held-out folds refused."""
+    ev = res.stop.evidence or {}
+    return {"refitted": [{k: c.get(k) for k in ("effect", "log10_p", "likelihood_ratio",
+                                                 "bartlett_factor")}
+                         for c in ev.get("refitted") or []],
+            "screening": [{k: c.get(k) for k in ("effect", "log10_p", "log10_p_familywise")}
+                          for c in ev.get("screening") or []],
+            "not_kept": (res.holdout or {}).get("not_kept") or []}
 
 
 def _heldout_warned(row: dict) -> bool:

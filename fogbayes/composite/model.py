@@ -1,4 +1,5 @@
-"""Paper 000's composite static temperature model of a FOG, as pure JAX functions.
+"""Paper 000's composite static temperature model of a FOG, as array functions (NumPy on
+NumPy input, JAX under jit/grad/vmap: :mod:`fogbayes.support.xp`).
 
 U = S1(T) S2(W) W + U0(T) + U1(T) t = sum M_ij T^i W^(j+1) + sum c_i T^i + t sum d_i T^i
 (eq. 8/14; T deg C, W deg/s, t s). :class:`FullParams` (linear) or :class:`ProductParams`
