@@ -27,3 +27,13 @@ def test_the_lag_coefficients_with_an_initial_state_are_lfilter(tau):
     z0 = 21.5 - b[0] * u[0]
     want, _ = lfilter(b, [1.0, -a], u, zi=[z0])
     np.testing.assert_array_equal(first_order_filter(b[0], b[1], a, u, z0), want)
+
+
+def test_varying_coefficient_recursion_equals_the_product_form():
+    """y_k = sum_j (prod_{i=j+1..k} a_i) b_j, the closed form of the recursion."""
+    from fogbayes.support.first_order_filter import varying_ar1
+
+    rng = np.random.default_rng(5)
+    a, b = rng.uniform(-1, 1, 30), rng.normal(size=30)
+    want = [sum(np.prod(a[j + 1:k + 1]) * b[j] for j in range(k + 1)) for k in range(30)]
+    np.testing.assert_allclose(varying_ar1(a, b), want, rtol=1e-12, atol=1e-14)

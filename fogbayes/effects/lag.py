@@ -10,19 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..support.first_order_filter import first_order_filter
-from ..support.numba_cache import numba
-
-
-@numba.njit(cache=True, nogil=True)
-def _recursion(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover (Numba)
-    """y_k = a_k y_{k-1} + b_k (y_{-1} = 0), in order; one compiled loop for every length."""
-    y = np.empty(b.size)
-    acc = 0.0
-    for k in range(b.size):
-        acc = a[k] * acc + b[k]
-        y[k] = acc
-    return y
+from ..support.first_order_filter import first_order_filter, varying_ar1
 
 
 def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
@@ -41,4 +29,4 @@ def first_order_lag(t: np.ndarray, u: np.ndarray, tau: float, *,
     a = np.exp(-h / tau)
     c = -tau * np.expm1(-h / tau) / h
     b = (1.0 - c) * u[1:] + (c - a) * u[:-1]
-    return _recursion(np.concatenate([[0.0], a]), np.concatenate([[y0], b]))
+    return varying_ar1(np.concatenate([[0.0], a]), np.concatenate([[y0], b]))

@@ -6,7 +6,8 @@ columns of U (``z_0`` given, 0 by default).
 importing ``scipy.signal`` costs half a second of a ``fogbayes loop`` call. With b = (1, 0) it
 is the AR(1) recursion x_t = u_t + a x_{t-1}, x_0 = u_0 (:func:`ar1_filter`): the loop's null
 series and the backward sums of its noise covariance; with the lag's b, the first-order lag of
-:mod:`fogbayes.effects.lag`.
+:mod:`fogbayes.effects.lag`. :func:`varying_ar1` is the recursion with a coefficient per step
+(the lag on irregular sample times).
 """
 
 from __future__ import annotations
@@ -29,6 +30,21 @@ def first_order_filter(b0: float, b1: float, a: float, U, z0=0.0) -> np.ndarray:
 def ar1_filter(phi: float, U) -> np.ndarray:
     """x_t = U_t + phi x_{t-1}, x_0 = U_0, down the columns of U."""
     return first_order_filter(1.0, 0.0, phi, U)
+
+
+def varying_ar1(a, b) -> np.ndarray:
+    """y_k = a_k y_{k-1} + b_k (y_{-1} = 0), in order; one compiled loop for every length."""
+    return _varying(np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(b, dtype=float))
+
+
+@numba.njit(cache=True, nogil=True)
+def _varying(a, b):  # pragma: no cover (Numba)
+    y = np.empty(b.size)
+    acc = 0.0
+    for k in range(b.size):
+        acc = a[k] * acc + b[k]
+        y[k] = acc
+    return y
 
 
 @numba.njit(cache=True, nogil=True)
