@@ -99,12 +99,14 @@ def test_jax_matches_plain_numpy_and_compiles_once():
     # compiles once (per dtype) as well
     assert (comp.loop is not None) == (jax.default_backend() == "cpu")
     loop = comp(U, TG, TT)
-    # the compiled loop is shared by the module's tests: count this dtype's compilations
-    n_sig = len(comp.loop.kernel.signatures) if comp.loop is not None else 0
     np.testing.assert_allclose(loop.rate, ref, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(loop.in_range, ok)
     if comp.loop is not None:
-        comp(U * 1.0001, TG, TT)
+        flat = [np.ravel(a).astype(float) for a in (U, TG, TT)]
+        comp.loop(np.empty(U.size), *flat, method="loop")
+        # the compiled loop is shared by the module's tests: count this dtype's compilations
+        n_sig = len(comp.loop.kernel.signatures)
+        comp.loop(np.empty(U.size), flat[0] * 1.0001, *flat[1:], method="loop")
         assert len(comp.loop.kernel.signatures) == n_sig
         into = np.full(U.size + 2, -1.0)
         back = comp.stream(np.ravel(U), np.ravel(TG), np.ravel(TT), out=into[1:-1])
@@ -129,6 +131,27 @@ def test_jax_matches_plain_numpy_and_compiles_once():
         np.testing.assert_allclose(got2.rate, ref2, rtol=1e-12, atol=1e-12)
         np.testing.assert_array_equal(got2.in_range, ok2)
         assert len(comp.loop.kernel.signatures) == n_sig  # new coefficients: no compilation
+
+
+@pytest.mark.parametrize("method", ["halley", "newton", "paper"])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_numpy_backend_gives_the_compiled_loops_bits(method, dtype):
+    """A one-off call runs the loop's generated source on whole arrays in NumPy: the same
+    operations in the same order, so the same bits, NaN where the loop writes NaN (missing
+    samples, rates outside the monotone box, a reading the model cannot produce)."""
+    comp = _comp(method, host=True)
+    u = np.concatenate([U, [np.nan, U[0], U[0] * 50.0, -U[0] * 50.0]]).astype(dtype)
+    tg = np.concatenate([TG, [20.0, np.nan, 20.0, 20.0]]).astype(dtype)
+    tt = np.concatenate([TT, [30.0, 30.0, 30.0, 30.0]]).astype(dtype)
+    by_numpy = comp.loop(np.empty(u.size, dtype), u, tg, tt, method="numpy")
+    by_loop = comp.loop(np.empty(u.size, dtype), u, tg, tt, method="loop")
+    assert by_numpy.dtype == by_loop.dtype == dtype
+    np.testing.assert_array_equal(by_numpy, by_loop)
+    assert np.isnan(by_loop[-4:-2]).all() and np.isfinite(by_loop[:-4]).all()
+    if method != "paper":
+        assert np.isnan(by_loop[-2:]).all()  # outside the box: no inverse
+    with pytest.raises(ValueError, match="'auto', 'loop' or 'numpy'"):
+        comp.loop(np.empty(u.size, dtype), u, tg, tt, method="jax")
 
 
 def test_vmap_over_sensors_equals_a_loop():

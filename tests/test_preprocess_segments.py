@@ -127,6 +127,20 @@ def test_rate_table_plateaus():
         assert best >= (0.5 if b in ramp_starts else 0.9) * n_true, (a, Tl, w)
 
 
+@pytest.mark.parametrize("n", [1, 2, 6, 100, 1001])
+def test_moving_range_equals_scipy_filters(n):
+    """The plateau detector's window range (strided for short windows) is SciPy's
+    maximum_filter1d - minimum_filter1d with mode="nearest", exactly."""
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    from fogbayes.preprocess.rate_table import _moving_range
+
+    x = np.random.default_rng(n).normal(size=n).round(1)  # rounding makes ties
+    for w in (3, 5, 7, 31, 33, 101):
+        ref = maximum_filter1d(x, w, mode="nearest") - minimum_filter1d(x, w, mode="nearest")
+        np.testing.assert_array_equal(_moving_range(x, w), ref)
+
+
 def test_rate_table_schedule_hand_computed():
     t = np.arange(10.0)
     sched = [(0.0, 5.0, 20.0, 1.0), (5.0, 10.0, 20.0, 2.0)]

@@ -49,7 +49,7 @@ class Compensator(NamedTuple):
     method: str
     fn: object  # jitted XLA (U, T, t) -> CompensationResult, coefficients baked in
     stream_fn: object  # the XLA rate, U's buffer donated to the output
-    loop: object = None  # on a CPU: the compiled loop(out, U, T, t) (:mod:`.compensate_loop`)
+    loop: object = None  # on a CPU: loop(out, U, T, t) (:class:`.compensate_loop.CompensationLoop`)
 
     def __call__(self, U, T, t) -> CompensationResult:
         if self.loop is not None:
@@ -65,7 +65,7 @@ class Compensator(NamedTuple):
         if self.loop is not None:
             U = np.asarray(U)
             return self.loop(np.empty(U.shape, U.dtype) if out is None else out, U,
-                             np.asarray(T, U.dtype), np.asarray(t, U.dtype))
+                             np.asarray(T, U.dtype), np.asarray(t, U.dtype), method="loop")
         return self.stream_fn(U, T, t)
 
 
@@ -353,10 +353,13 @@ def build_compensator(p: FullParams | ProductParams, sc: Scaling, *, T_range, W_
 
     ``rtol`` = 1e-9 (1e-7 %) is far below any gyro's noise and the done-when's 1e-4 %, and
     for paper 000's coefficients gives Halley 2 iterations, the paper's own count.
-    ``host``: calls go to the compiled CPU loop (True), to XLA on JAX's default device
-    (False), or to the loop where that device is the CPU or JAX was never started (None:
-    :func:`fogbayes.support.lazy.jax_on_cpu`). Streams pass True: their
-    chunks start and end in host memory, where a GPU only adds two transfers a chunk.
+    ``host``: calls go to the CPU (True), to XLA on JAX's default device (False), or to
+    the CPU where that device is the CPU or JAX was never started (None:
+    :func:`fogbayes.support.lazy.jax_on_cpu`). On the CPU a one-off call below
+    :data:`.compensate_loop.NUMPY_BELOW` samples runs the loop's source on whole arrays in
+    NumPy, other calls the compiled loop (:class:`.compensate_loop.CompensationLoop`).
+    Streams pass True: their chunks start and end in host memory, where a GPU only adds two
+    transfers a chunk, and they always take the compiled loop.
     """
     if isinstance(p, ProductParams):
         p = product_to_full(p)

@@ -1,4 +1,5 @@
-"""The composite compensator (:mod:`fogbayes.composite.compensate`) as a compiled CPU loop.
+"""The composite compensator (:mod:`fogbayes.composite.compensate`) on the CPU: a compiled loop,
+and the same generated source on whole arrays for NumPy (one-off calls, no Numba to start).
 
 Per sample, the XLA program ``_rate``'s algorithm: scaled T', t', y = U' - c(T') - t' d(T'),
 P(w) = sum_j M_j(T') w^j, clipped Halley/Newton/fixed-point steps; rate = w W_scale inside the
@@ -12,7 +13,6 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..support.numba_cache import njit_source, numba
 from .model import RESID_ABS, RESID_REL
 
 
@@ -44,9 +44,15 @@ def _poly(terms: list[str], w: str) -> str:
     return expr
 
 
-def source(p, sc, box, *, method: str, iterations: int, recip) -> tuple[str, np.ndarray]:
+def source(p, sc, box, *, method: str, iterations: int, recip,
+           vectorised: bool = False) -> tuple[str, np.ndarray]:
     """(the loop's source, its coefficient vector q). The source depends on the structure
-    only (degrees, method, iterations, whether a reciprocal start is used)."""
+    only (degrees, method, iterations, whether a reciprocal start is used).
+
+    ``vectorised``: the same statements on whole arrays for NumPy (no per-sample loop;
+    ``np.minimum``/``np.maximum``/``np.where`` for the scalar ``min``/``max``/``if``), the
+    same IEEE operations in the same order, so both backends give the same bits.
+    """
     M, c, d = (np.asarray(v, dtype=float) for v in p)
     k = M.shape[1]
     q = _Names()
@@ -57,18 +63,21 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> tuple[str, np.
     Mn = [q(M[:, j]) for j in range(k)]
     rn = None if method == "paper" or recip is None else q(recip)
     S = [f"S{j}" for j in range(k)]
+    x, ind = ("", " " * 4) if vectorised else ("[i]", " " * 8)  # sample index, body indent
     L = ["def loop(out, U, T, t, q):"]
     L += [f"    q_{i} = q[{i}]" for i in range(len(q.values))]
-    L += ["    for i in prange(U.shape[0]):",
-          f"        Tp = (T[i] - {T_ref}) * {T_inv}",
-          f"        tp = t[i] * {t_inv}",
-          f"        y = (U[i] - {U_ref}) * {U_inv} - {_horner(cn, 'Tp')} - tp * {_horner(dn, 'Tp')}"]
-    L += [f"        S{j} = {_horner(Mn[j], 'Tp')}" for j in range(k)]
+    if not vectorised:
+        L.append("    for i in prange(U.shape[0]):")
+    L += [f"Tp = (T{x} - {T_ref}) * {T_inv}",
+          f"tp = t{x} * {t_inv}",
+          f"y = (U{x} - {U_ref}) * {U_inv} - {_horner(cn, 'Tp')} - tp * {_horner(dn, 'Tp')}"]
+    L += [f"S{j} = {_horner(Mn[j], 'Tp')}" for j in range(k)]
     if rn is None:
-        L.append("        w = y / S0")
+        L.append("w = y / S0")
     else:
-        L.append(f"        w = y * {_horner(rn, 'Tp')}")
-    clip = f"        w = min(max(w, {lo}), {hi})"
+        L.append(f"w = y * {_horner(rn, 'Tp')}")
+    clip = (f"w = np.minimum(np.maximum(w, {lo}), {hi})" if vectorised
+            else f"w = min(max(w, {lo}), {hi})")
     if method != "paper":
         L.append(clip)
     g1 = _poly([f"{j + 1}.0 * S{j}" for j in range(k)], "w")
@@ -76,42 +85,92 @@ def source(p, sc, box, *, method: str, iterations: int, recip) -> tuple[str, np.
         if k > 1 else "0.0"
     for _ in range(iterations):
         if method == "paper":
-            L.append(f"        w = y / {_poly(S, 'w')}")
+            L.append(f"w = y / {_poly(S, 'w')}")
             continue
-        L.append(f"        g = w * {_poly(S, 'w')} - y")
-        L.append(f"        g1 = {g1}")
+        L.append(f"g = w * {_poly(S, 'w')} - y")
+        L.append(f"g1 = {g1}")
         if method == "newton":
-            L.append("        w = w - g / g1")
+            L.append("w = w - g / g1")
         else:
-            L.append(f"        g2 = {g2}")
-            L.append("        w = w - 2.0 * g * g1 / (2.0 * g1 * g1 - g * g2)")
+            L.append(f"g2 = {g2}")
+            L.append("w = w - 2.0 * g * g1 / (2.0 * g1 * g1 - g * g2)")
         L.append(clip)
     if method == "paper":
-        L.append(f"        out[i] = w * {W_scale}")
+        L.append(f"out{x or '[...]'} = w * {W_scale}")
+    elif vectorised:
+        L.append(f"r = np.abs(w * {_poly(S, 'w')} - y)")
+        L.append(f"ok = (w > {lo}) & (w < {hi}) & (r <= {RESID_ABS!r} + {RESID_REL!r} * np.abs(y))")
+        L.append(f"out[...] = np.where(ok, w * {W_scale}, np.nan)")
     else:
-        L.append(f"        r = abs(w * {_poly(S, 'w')} - y)")
-        L.append(f"        ok = (w > {lo}) and (w < {hi}) and "
+        L.append(f"r = abs(w * {_poly(S, 'w')} - y)")
+        L.append(f"ok = (w > {lo}) and (w < {hi}) and "
                  f"(r <= {RESID_ABS!r} + {RESID_REL!r} * abs(y))")
-        L.append(f"        out[i] = w * {W_scale} if ok else np.nan")
-    L.append("    return out")
-    return "\n".join(L) + "\n", np.asarray(q.values, dtype=float)
+        L.append(f"out[i] = w * {W_scale} if ok else np.nan")
+    body = L[:1 + len(q.values) + (not vectorised)]
+    body += [ind + line for line in L[len(body):]]
+    body.append("    return out")
+    return "\n".join(body) + "\n", np.asarray(q.values, dtype=float)
+
+
+#: Sources whose Numba loop this process has compiled or loaded (``method="auto"`` then
+#: uses it).
+_COMPILED: set = set()
+
+#: ``method="auto"``: a structure whose loop this process has not loaded yet is evaluated
+#: by NumPy below this many samples. Measured on the 2-core box (benchmarks/
+#: RESULTS_interactive.md): starting Numba and loading a cached loop costs ~0.5 s (its
+#: import and CPU target), NumPy ~0.2 us a sample against ~5 ns for the loop.
+NUMPY_BELOW = 2_000_000
 
 
 @lru_cache(maxsize=64)
 def _compiled(text: str):
     """The compiled program of one generated source (one per structure; module doc)."""
+    from ..support.numba_cache import njit_source, numba  # Numba only when a loop is used
+
+    _COMPILED.add(text)
     return njit_source(text, "loop", {"np": np, "prange": numba.prange}, nogil=True,
                        parallel=True, error_model="numpy")
 
 
-def compile_loop(p, sc, box, *, method: str, iterations: int, recip):
-    """``loop(out, U, T, t)`` for these coefficients (see the module doc); the compiled
-    program is shared by every fit of the same structure."""
-    text, q = source(p, sc, box, method=method, iterations=iterations, recip=recip)
-    kernel = _compiled(text)
+@lru_cache(maxsize=64)
+def _vectorised(text: str):
+    """The NumPy function of one generated vectorised source."""
+    space = {"np": np}
+    exec(text, space)  # noqa: S102 -- our own generated arithmetic, no input text
+    return space["loop"]
 
-    def loop(out, U, T, t):
-        return kernel(out, U, T, t, q)
 
-    loop.kernel = kernel  # the shared compiled program (its ``signatures``: one per dtype)
-    return loop
+class CompensationLoop:
+    """``loop(out, U, T, t, method="auto")`` for one fit's coefficients (module doc): the
+    compiled program is shared by every fit of the same structure.
+
+    ``method``: ``"loop"`` (Numba), ``"numpy"``, or ``"auto"``: NumPy for a one-off call
+    (fewer than :data:`NUMPY_BELOW` samples and this structure's loop not loaded yet in the
+    process), the loop otherwise. Both give the same numbers (tests/test_composite_compensate.py);
+    callers that compensate many chunks ask for ``"loop"``.
+    """
+
+    def __init__(self, p, sc, box, *, method: str, iterations: int, recip):
+        kw = dict(method=method, iterations=iterations, recip=recip)
+        self.text, self.q = source(p, sc, box, **kw)
+        self.numpy_text = source(p, sc, box, vectorised=True, **kw)[0]
+
+    @property
+    def kernel(self):
+        """The shared compiled program (its ``signatures``: one per dtype)."""
+        return _compiled(self.text)
+
+    def __call__(self, out, U, T, t, method: str = "auto"):
+        if method not in ("auto", "loop", "numpy"):
+            raise ValueError(f"method must be 'auto', 'loop' or 'numpy', not {method!r}")
+        if method == "numpy" or (method == "auto" and U.shape[0] < NUMPY_BELOW
+                                 and self.text not in _COMPILED):
+            with np.errstate(all="ignore"):  # the loop's error_model="numpy": inf/NaN, quietly
+                return _vectorised(self.numpy_text)(out, U, T, t, self.q)
+        return self.kernel(out, U, T, t, self.q)
+
+
+def compile_loop(p, sc, box, *, method: str, iterations: int, recip) -> CompensationLoop:
+    """The compensation loop for these coefficients (see :class:`CompensationLoop`)."""
+    return CompensationLoop(p, sc, box, method=method, iterations=iterations, recip=recip)

@@ -5,19 +5,17 @@ With cell means and Sigma = N^-1 + lam R: G = W_XX + Xb'Sigma^-1 Xb, h = W_Xy + 
 theta = G^-1 h, s^2 = RSS / (n - p), cov = s^2 G^-1, with RSS = |r_w|^2 + rb'Sigma^-1 rb from the
 residuals (r_w within cells, through the triangular factor of [X y]; rb = yb - Xb theta).
 R^-1 = Q is tridiagonal, so Sigma^-1 v and log|Sigma| = log|R| + log|Q + lam N| - sum log n_k
-cost O(K p) (a compiled tridiagonal Cholesky); (lam, rho) by REML; lam -> 0 is OLS.
+cost O(K p) (LAPACK's banded Cholesky); (lam, rho) by REML; lam -> 0 is OLS.
 """
 
 from __future__ import annotations
 
 from typing import NamedTuple
 
-import math
-
 import numpy as np
-from scipy.optimize import minimize
+from scipy.linalg.lapack import dpbtrf, dtbtrs
 
-from ..support.numba_cache import numba
+from ..support.nelder_mead import nelder_mead
 
 
 class CellStats(NamedTuple):
@@ -78,84 +76,64 @@ def precision_bands(gaps: np.ndarray, rho: float):
     return diag, -r * w, float(np.sum(np.log1p(-r * r)))
 
 
-@numba.njit(cache=True, nogil=True)
-def _sigma_inverse(N, diag, off, lam, small_lam, V):  # pragma: no cover (Numba)
-    """Sigma^-1 V (K, m) in place, Sigma = N^-1 + lam R, and log|Q + lam N| (Q = R^-1 with
-    bands ``diag``, ``off``), by the Cholesky factor of the tridiagonal Q + lam N:
-    Sigma^-1 = N - lam N (Q + lam N)^-1 N, or, for large lam (``small_lam`` False),
-    (Q - Q (Q + lam N)^-1 Q) / lam (Woodbury both ways; the better-conditioned one)."""
-    K, m = V.shape
-    ell = np.empty(K)  # the factor's diagonal
-    sub = np.empty(K)  # and subdiagonal (sub[k] couples k-1 and k)
-    sub[0] = 0.0
-    ell[0] = math.sqrt(diag[0] + lam * N[0])
-    logdet = 2.0 * math.log(ell[0])
-    for k in range(1, K):
-        sub[k] = off[k - 1] / ell[k - 1]
-        ell[k] = math.sqrt(diag[k] + lam * N[k] - sub[k] * sub[k])
-        logdet += 2.0 * math.log(ell[k])
-    # row by row, the columns innermost: each column's substitution is a chain of divisions,
-    # the columns side by side keep the CPU's pipeline full (4x faster on 19 columns); the
-    # same operations on each element as one column at a time
-    B = np.empty((K, m))  # N V or Q V
-    for k in range(K):
-        for j in range(m):
-            if small_lam:
-                B[k, j] = N[k] * V[k, j]
-            else:
-                s = diag[k] * V[k, j]
-                if k > 0:
-                    s += off[k - 1] * V[k - 1, j]
-                if k < K - 1:
-                    s += off[k] * V[k + 1, j]
-                B[k, j] = s
-    X = np.empty((K, m))  # (L L')^-1 B
-    for j in range(m):
-        X[0, j] = B[0, j] / ell[0]
-    for k in range(1, K):
-        for j in range(m):
-            X[k, j] = (B[k, j] - sub[k] * X[k - 1, j]) / ell[k]
-    for j in range(m):
-        X[K - 1, j] = X[K - 1, j] / ell[K - 1]
-    for k in range(K - 2, -1, -1):
-        for j in range(m):
-            X[k, j] = (X[k, j] - sub[k + 1] * X[k + 1, j]) / ell[k]
-    for k in range(K):
-        for j in range(m):
-            if small_lam:
-                V[k, j] = B[k, j] - lam * N[k] * X[k, j]
-            else:
-                s = diag[k] * X[k, j]
-                if k > 0:
-                    s += off[k - 1] * X[k - 1, j]
-                if k < K - 1:
-                    s += off[k] * X[k + 1, j]
-                V[k, j] = (B[k, j] - s) / lam
-    return logdet
+def _between(st: CellStats, lam: float, rho: float):
+    """The cell means' GLS pieces for (lam, rho): Omega = [Xb yb]' Sigma^-1 [Xb yb] as
+    (Omega, F, form), with what a residual's quadratic form needs, and log|Q + lam N|.
+
+    L L' = Q + lam N (LAPACK's banded Cholesky, O(K)) and Woodbury either way round, the
+    better-conditioned one: for lam N small, Sigma^-1 = N - lam N (L L')^-1 N, so
+    v' Sigma^-1 v = v'N v - lam |L^-1 N v|^2; for lam N large,
+    Sigma^-1 = (Q - Q (L L')^-1 Q) / lam, so v' Sigma^-1 v = (v'Q v - |L^-1 Q v|^2) / lam.
+    Both need one triangular solve of the p + 1 columns, F = L^-1 B[Xb yb] (B = N or Q):
+    a residual rb = yb - Xb theta then has L^-1 B rb = F_y - F_x theta without a second one.
+    """
+    diag, off, logdetR = precision_bands(st.gaps, float(rho))
+    small = bool(lam * np.median(st.N) <= 1.0)
+    band = np.empty((2, diag.size))
+    band[0] = diag + lam * st.N
+    band[1, :-1], band[1, -1] = off, 0.0
+    L, info = dpbtrf(band, lower=1)
+    if info != 0:  # Q + lam N is positive definite for every lam >= 0, 0 <= rho < 1
+        raise np.linalg.LinAlgError(f"cell-offset precision not positive definite ({info})")
+    logdetQN = 2.0 * float(np.sum(np.log(L[0])))
+    Z = np.column_stack([st.Xb, st.yb])
+    if small:
+        B = st.N[:, None] * Z
+    else:
+        B = diag[:, None] * Z
+        B[:-1] += off[:, None] * Z[1:]
+        B[1:] += off[:, None] * Z[:-1]
+    F = dtbtrs(L, B, uplo="L")[0]
+    C = Z.T @ B
+    Omega = C - lam * (F.T @ F) if small else (C - F.T @ F) / lam
+    return Omega, F, small, diag, off, logdetR + logdetQN
+
+
+def _quadratic(st: CellStats, lam: float, small: bool, diag, off, v, Fv) -> float:
+    """v' Sigma^-1 v from v and L^-1 B v (see :func:`_between`)."""
+    if small:
+        return float(st.N @ (v * v) - lam * (Fv @ Fv))
+    vQv = float(diag @ (v * v) + 2.0 * off @ (v[:-1] * v[1:]))
+    return (vQv - float(Fv @ Fv)) / lam
 
 
 def _solve(st: CellStats, lam: float, rho: float):
     """GLS pieces for given (lam, rho) (module doc): theta, G, RSS, REML, dof."""
     p = st.WXX.shape[0]
-    diag, off, logdetR = precision_bands(st.gaps, float(rho))
-    small_lam = bool(lam * np.median(st.N) <= 1.0)  # which Woodbury form (_sigma_inverse)
-    S = np.column_stack([st.Xb, st.yb])  # Sigma^-1 [Xb yb], one pass, in place
-    logdetQN = _sigma_inverse(st.N, diag, off, float(lam), small_lam, S)
-    G = st.WXX + st.Xb.T @ S[:, :p]
-    h = st.WXy + st.Xb.T @ S[:, p]
+    Omega, F, small, diag, off, logdetV = _between(st, lam, rho)
+    G = st.WXX + Omega[:p, :p]
+    h = st.WXy + Omega[:p, p]
     theta = np.linalg.solve(G, h)
     # RSS from the residuals, not q - h'theta: on a rate table fitted to 1e-3 of its
     # spread, that difference loses ~9 digits and the REML surface turned noisy (5e-3 nats in
     # second differences on the paper000 table; 8e-8 from the residuals)
     within = st.R[:p, p] - st.R[:p, :p] @ theta  # within-cell residual: |.|^2 + R_yy^2
     rb = st.yb - st.Xb @ theta
-    V = rb[:, None].copy()
-    _sigma_inverse(st.N, diag, off, float(lam), small_lam, V)
-    rss = max(float(within @ within + st.R[p, p] ** 2 + rb @ V[:, 0]), 1e-300)
-    logdetV = logdetR + logdetQN  # log|V| = log|N| + log|Sigma| (module doc)
+    between = _quadratic(st, lam, small, diag, off, rb, F[:, p] - F[:, :p] @ theta)
+    rss = max(float(within @ within + st.R[p, p] ** 2 + between), 1e-300)
     logdetG = np.linalg.slogdet(G)[1]
     dof = st.n - p
-    reml = -0.5 * (dof * np.log(rss / dof) + logdetV + logdetG)
+    reml = -0.5 * (dof * np.log(rss / dof) + logdetV + logdetG)  # log|V| = log|N| + log|Sigma|
     return theta, G, rss, reml, dof
 
 
@@ -173,9 +151,8 @@ def fit_cell_noise(st: CellStats, *, lam0: float = 1e-2, rho0: float = 0.5) -> C
         return -_solve(st, lam, rho)[3]
 
     z0 = np.array([np.log(lam0), np.log(rho0 / (0.99 - rho0))])
-    best = minimize(nll, z0, method="Nelder-Mead",
-                    options={"xatol": 1e-3, "fatol": 1e-5, "maxiter": 300,
-                             "initial_simplex": z0 + np.array([[0, 0], [3.0, 0], [0, 2.0]])})
+    best = nelder_mead(nll, z0 + np.array([[0, 0], [3.0, 0], [0, 2.0]]), xatol=1e-3,
+                       fatol=1e-5, maxiter=300)
     white = np.array([-30.0, 0.0])
     z = best.x if best.fun < nll(white) else white
     lam, rho = unpack(z)
