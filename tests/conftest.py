@@ -20,6 +20,11 @@ from pathlib import Path
 if "PYTEST_XDIST_WORKER" not in os.environ and "FOGBAYES_CACHE_DIR" not in os.environ:
     os.environ["FOGBAYES_CACHE_DIR"] = _RUN_CACHE = tempfile.mkdtemp(prefix="fogbayes-test-")
 
+# xdist's workers already fill the cores: each runs its independent calls one after another
+# (fogbayes.support.threads), as a user would set it for Dask workers
+if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
+    os.environ.setdefault("FOGBAYES_THREADS", "1")
+
 import fogbayes  # noqa: E402, F401  (float64 and the program cache; before JAX: _config)
 import pytest  # noqa: E402
 from _measured import MEASURED, SHARED, measured_path  # noqa: E402, F401  (re-exported)

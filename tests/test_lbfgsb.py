@@ -79,3 +79,42 @@ def test_fit_noise_many_equals_one_fit_per_problem():
         # where rounding moves the optimum along it (measured 3e-5) without changing logL
         np.testing.assert_allclose(got.theta, ref.theta, atol=1e-3)
         np.testing.assert_allclose(got.beta, ref.beta, rtol=1e-6, atol=1e-9)
+
+
+def test_starts_in_threads_give_the_lone_runs_bits(monkeypatch):
+    """The starts run side by side in threads (the CPU filter releases the GIL): every
+    result equals the one the same start gives alone, to the bit."""
+    from fogbayes.inference import noise_ssm as ns
+    from fogbayes.inference.noise_fit import fit_noise_many
+    from fogbayes.loop.nullsim import simulate
+    from fogbayes.support import threads
+
+    spec = ns.make_spec(10.0, 6000.0, n_markov=1)
+    n = 500
+    theta = np.array([-1.0, -9.0, 0.0, np.log(300.0)])
+    noise = simulate(spec, theta, 1.0, np.ones(n), 3, seed=4)
+    t = np.linspace(-1, 1, n)
+    X = np.column_stack([np.ones(n), t, t ** 2])
+    ys = [0.2 * t + noise[:, k] for k in range(3)]
+
+    def fits(workers):
+        monkeypatch.setattr(threads, "WORKERS", workers)
+        return fit_noise_many(spec, ys, [X] * 3, n_starts=3)
+
+    threaded, alone = fits(2), fits(1)
+    for a, b in zip(threaded, alone):
+        np.testing.assert_array_equal(a.theta, b.theta)
+        np.testing.assert_array_equal(a.beta, b.beta)
+        assert a.loglik == b.loglik and a.converged == b.converged
+
+
+@pytest.mark.parametrize("value,expected", [("1", 1), ("64", None), ("0", None), ("x", None)])
+def test_fogbayes_threads_caps_the_thread_count(monkeypatch, value, expected):
+    """FOGBAYES_THREADS caps the threads at a positive count; 0 or a non-number leaves the
+    cores' count (a thread count only changes speed, never a result)."""
+    from fogbayes.support import threads
+
+    monkeypatch.setenv("FOGBAYES_THREADS", value)
+    monkeypatch.delattr(threads.os, "sched_getaffinity", raising=False)
+    monkeypatch.setattr(threads.os, "cpu_count", lambda: 8)
+    assert threads._workers() == (8 if expected is None else expected)

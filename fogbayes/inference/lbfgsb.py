@@ -2,6 +2,9 @@
 
 The objective is ``batch(rows, points) -> (values (b,), grads (b, d))`` (``rows[i]``: which
 minimisation), called here one row at a time; a non-finite value or gradient is a failed point.
+The starts run side by side in threads (:func:`fogbayes.support.threads.thread_map`):
+SciPy's L-BFGS-B keeps its state in each call's own arrays, and the objectives here spend most
+of their time in the CPU filter, which releases the GIL, so each result is a lone run's.
 """
 
 from __future__ import annotations
@@ -10,6 +13,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 from scipy import optimize
+
+from ..support import threads
 
 Batch = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
@@ -24,16 +29,17 @@ def failed_as_large(v, g) -> tuple[float, np.ndarray]:
 
 def minimize_one_by_one(batch: Batch, starts: Sequence[np.ndarray], bounds, *,
                         maxiter: int = 200) -> list[optimize.OptimizeResult]:
-    """L-BFGS-B from each start (the same bounds), one after another; ``batch`` is called
-    with one row per evaluation. Returns the SciPy results in the order of ``starts``."""
-    out = []
-    for i, x0 in enumerate(starts):
+    """L-BFGS-B from each start (the same bounds), the starts side by side in threads
+    (module doc); ``batch`` is called with one row per evaluation (from those threads: it must not
+    share mutable state between rows). Returns the SciPy results in the order of ``starts``."""
+    def run(i: int):
         row = np.array([i])
 
-        def fun(x, row=row):
+        def fun(x):
             v, g = batch(row, np.asarray(x, dtype=float)[None])
             return failed_as_large(v[0], g[0])
 
-        out.append(optimize.minimize(fun, np.asarray(x0, float), jac=True, method="L-BFGS-B",
-                                     bounds=bounds, options={"maxiter": maxiter}))
-    return out
+        return optimize.minimize(fun, np.asarray(starts[i], float), jac=True,
+                                 method="L-BFGS-B", bounds=bounds, options={"maxiter": maxiter})
+
+    return threads.thread_map(run, range(len(starts)))

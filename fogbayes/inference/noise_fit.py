@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..support.threads import thread_map
 from .lbfgsb import minimize_one_by_one
 from .noise_kalman import negloglik
 from .noise_ssm import NoiseSpec, bounds, gls
@@ -105,7 +106,8 @@ def fit_noise_many(spec: NoiseSpec, ys, Xs, mask=None, w=None, *, theta0=None,
         if extra_starts[k] is not None:
             starts = np.vstack([starts, np.atleast_2d(extra_starts[k])])
         starts = np.clip(starts, lo, hi)
-        vals = np.array([negloglik(spec, th, y, X, mask, w, grad=False)[0] for th in starts])
+        vals = np.array(thread_map(
+            lambda th: negloglik(spec, th, y, X, mask, w, grad=False)[0], starts))
         vals = np.where(np.isfinite(vals), vals, np.inf)
         for x0 in _diverse(starts, vals, n_starts):
             owner.append(k)

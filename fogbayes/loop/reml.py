@@ -18,6 +18,7 @@ from ..inference.lbfgsb import failed_as_large, minimize_one_by_one
 from ..inference.noise_kalman import negloglik
 from ..support.lazy import lazy_module
 from ..support.programs import program
+from ..support.threads import thread_map
 
 jax = lazy_module("jax")  # the JAX definition below only: the fits use noise_kalman
 jnp = lazy_module("jax.numpy")
@@ -90,7 +91,7 @@ def reml_theta(nf: nfit.NoiseFit, y, X, mask, w, *, maxiter: int = 200,
         return failed_as_large(v[0], g[0])[0]
 
     starts = np.clip(_starts(spec, nf.theta), lo, hi)
-    vals = np.array([value(th) for th in starts])
+    vals = np.array(thread_map(value, starts))
     runs = minimize_one_by_one(batch, [starts[i] for i in np.argsort(vals)[:n_starts]],
                                list(zip(lo, hi)), maxiter=maxiter)
     return np.asarray(min(runs, key=lambda r: r.fun).x)
