@@ -88,8 +88,8 @@ def test_without_a_cpu_backend_the_xla_programs_are_used(monkeypatch):
 
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_the_numpy_path_is_the_loops_arithmetic(case):
-    """A one-off call (no loop compiled yet, few samples) runs in NumPy, term by term in the
-    loop's order: the same numbers to a rounding, and no compilation (0.7 s) is paid."""
+    """A one-off call (no loop compiled yet, few samples) runs the loop's source in NumPy:
+    the loop's bits, and no compilation (0.7 s) is paid."""
     from fogbayes.thermal import compensate_loops as cl
 
     names, terms = CASES[case]
@@ -106,5 +106,10 @@ def test_the_numpy_path_is_the_loops_arithmetic(case):
     auto = compensate_into(fresh, coef2, z, y)
     assert fresh.terms not in cl._COMPILED_TERMS  # "auto" did not compile it
     np.testing.assert_allclose(auto, want, rtol=0, atol=1e-13)
-    compensate_into(basis, coef, z, y, method="loop")
+    by_loop = compensate_into(basis, coef, z, y, method="loop")
     assert basis.terms in cl._COMPILED_TERMS  # once compiled, "auto" uses the loop
+    # both run one generated source: the same bits, in float64 and float32
+    np.testing.assert_array_equal(compensate_into(basis, coef, z, y, method="numpy"), by_loop)
+    z32, y32 = z.astype(np.float32), y.astype(np.float32)
+    np.testing.assert_array_equal(compensate_into(basis, coef, z32, y32, method="numpy"),
+                                  compensate_into(basis, coef, z32, y32, method="loop"))

@@ -77,8 +77,9 @@ def precision_bands(gaps: np.ndarray, rho: float):
 
 
 def _between(st: CellStats, lam: float, rho: float):
-    """The cell means' GLS pieces for (lam, rho): Omega = [Xb yb]' Sigma^-1 [Xb yb] as
-    (Omega, F, form), with what a residual's quadratic form needs, and log|Q + lam N|.
+    """The cell means' GLS pieces for (lam, rho): (Omega, F, small, diag, off, log|V|) with
+    Omega = [Xb yb]' Sigma^-1 [Xb yb], what :func:`_quadratic` needs, and
+    log|V| = log|R| + log|Q + lam N| (module doc).
 
     L L' = Q + lam N (LAPACK's banded Cholesky, O(K)) and Woodbury either way round, the
     better-conditioned one: for lam N small, Sigma^-1 = N - lam N (L L')^-1 N, so
@@ -93,8 +94,8 @@ def _between(st: CellStats, lam: float, rho: float):
     band[0] = diag + lam * st.N
     band[1, :-1], band[1, -1] = off, 0.0
     L, info = dpbtrf(band, lower=1)
-    if info != 0:  # Q + lam N is positive definite for every lam >= 0, 0 <= rho < 1
-        raise np.linalg.LinAlgError(f"cell-offset precision not positive definite ({info})")
+    if info != 0:  # Q + lam N is positive definite for lam >= 0, 0 <= rho < 1, but may not
+        L = np.full_like(band, np.nan)  # be to working precision: NaN, a failed simplex point
     logdetQN = 2.0 * float(np.sum(np.log(L[0])))
     Z = np.column_stack([st.Xb, st.yb])
     if small:

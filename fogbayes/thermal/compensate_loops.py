@@ -2,7 +2,8 @@
 
 Per sample, as :func:`fogbayes.thermal.compensate.bias_compensator`: u_c = (z_c - centre_c) / scale_c,
 out = y - sum_k coef_k prod_c u_c^{e_kc}. Source generated per term set; coefficients, centre and
-scale are arguments; ``out`` may be written in place.
+scale are arguments; ``out`` may be written in place. One-off calls run the same source on whole
+arrays in NumPy.
 """
 
 from __future__ import annotations
@@ -14,17 +15,27 @@ from functools import lru_cache
 import numpy as np
 
 
-def _source(terms: tuple[tuple[int, ...], ...]) -> str:
+def _source(terms: tuple[tuple[int, ...], ...], vectorised: bool = False) -> str:
+    """The loop's source; ``vectorised``: the same statements on whole arrays for NumPy (the
+    float64 reciprocal of each scale made explicit, as Numba types ``1.0 / scale[j]``), so
+    both backends give the same bits."""
     c = len(terms[0])
     lines = ["def loop(out, y, z, coef, centre, scale):"]
-    lines += [f"    r{j} = 1.0 / scale[{j}]" for j in range(c)]
-    lines.append("    for i in prange(y.shape[0]):")
-    lines += [f"        u{j} = (z[i, {j}] - centre[{j}]) * r{j}" for j in range(c)]
+    one = "np.float64(1.0)" if vectorised else "1.0"
+    lines += [f"    r{j} = {one} / scale[{j}]" for j in range(c)]
+    if vectorised:
+        x, row, ind = "", ":", "    "
+    else:
+        x, row, ind = "[i]", "i", "        "
+        lines.append("    for i in prange(y.shape[0]):")
+    lines += [f"{ind}u{j} = (z[{row}, {j}] - centre[{j}]) * r{j}" for j in range(c)]
     parts = []
     for k, e in enumerate(terms):
         factors = [f"u{j}" for j, ej in enumerate(e) for _ in range(ej)]
         parts.append(" * ".join([f"coef[{k}]", *factors]))
-    lines.append(f"        out[i] = y[i] - ({' + '.join(parts)})")
+    lines.append(f"{ind}out{x or '[...]'} = y{x} - ({' + '.join(parts)})")
+    if vectorised:
+        lines.append("    return out")
     return "\n".join(lines) + "\n"
 
 
@@ -54,21 +65,18 @@ def _compiled(terms: tuple[tuple[int, ...], ...]) -> Callable:
 NUMPY_BELOW = 5_000_000
 
 
+@lru_cache(maxsize=64)
+def _vectorised(terms: tuple[tuple[int, ...], ...]) -> Callable:
+    space = {"np": np}
+    exec(_source(terms, vectorised=True), space)  # noqa: S102 -- our own generated arithmetic
+    return space["loop"]
+
+
 def compensate_numpy(basis, coef, z, y, out=None) -> np.ndarray:
-    """The loop's arithmetic, term by term in the same order, in NumPy (no compilation)."""
-    u = [(z[:, j] - basis.centre[j]) * (1.0 / basis.scale[j]) for j in range(z.shape[1])]
-    acc = None
-    for k, e in enumerate(basis.terms):
-        term = coef[k]
-        for j, ej in enumerate(e):
-            for _ in range(ej):
-                term = term * u[j]
-        acc = term if acc is None else acc + term
-    res = y - acc
-    if out is None:
-        return np.asarray(res, dtype=y.dtype)
-    out[...] = res
-    return out
+    """The loop's source run on whole arrays in NumPy (no compilation), the same bits."""
+    out = np.empty_like(y) if out is None else out
+    return _vectorised(basis.terms)(out, y, z, coef, np.asarray(basis.centre, dtype=y.dtype),
+                                    np.asarray(basis.scale, dtype=y.dtype))
 
 
 def compensate_into(basis, coef, z, y, out=None, *, method: str = "auto") -> np.ndarray:
