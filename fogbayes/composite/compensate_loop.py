@@ -117,9 +117,10 @@ def source(p, sc, box, *, method: str, iterations: int, recip,
 _COMPILED: set = set()
 
 #: ``method="auto"``: a structure whose loop this process has not loaded yet is evaluated
-#: by NumPy below this many samples. Measured on the 2-core box (benchmarks/
-#: RESULTS_interactive.md): starting Numba and loading a cached loop costs ~0.5 s (its
-#: import and CPU target), NumPy ~0.2 us a sample against ~5 ns for the loop.
+#: by NumPy below this many samples. Measured on the 2-core box (paper 000's model, Halley,
+#: 1e6 samples): the first loop call 0.66 s (Numba's import and CPU target, the cached
+#: loop), then 2.6 ns a sample; NumPy 84 ns a sample. The crossover is ~8e6; below 2e6 a
+#: one-off call costs NumPy at most ~0.17 s.
 NUMPY_BELOW = 2_000_000
 
 
