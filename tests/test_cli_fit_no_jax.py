@@ -1,7 +1,8 @@
 """``fogbayes fit REC -m bias-t`` is least squares on NumPy: a fresh process that runs it on a
-1 h record must not import JAX, NumPyro, Numba or scipy.linalg (their import, and loading
-Numba's cached loops, are most of the command's wall time), and its document is the library's
-``fit_recording`` (same coefficients, bit for bit)."""
+1 h record must not import JAX, NumPyro, Numba, scipy.linalg or pandas (their import, and
+loading Numba's cached loops, are most of the command's wall time; the CSV's numbers are
+parsed by NumPy), and its document is the library's ``fit_recording`` on the file as pandas
+reads it (same coefficients, bit for bit)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from fogbayes.thermal.workflow import fit_recording
 _CODE = """
 import json, sys
 from fogbayes.cli import main
-heavy = ("jax", "numpyro", "numba", "scipy.linalg")
+heavy = ("jax", "numpyro", "numba", "scipy.linalg", "pandas")
 after_import = sorted(m for m in heavy if m in sys.modules)
 rc = main(["-q", "fit", sys.argv[1], "-m", "bias-t", "--json", sys.argv[2]])
 print(json.dumps({"rc": rc, "after_import": after_import,
@@ -35,6 +36,7 @@ def test_fit_bias_t_in_a_fresh_process_imports_no_jax(tmp_path):
     seen = json.loads(run.stdout.strip().splitlines()[-1])
     assert seen == {"rc": 0, "after_import": [], "after_fit": []}
     doc = json.loads(out.read_text())
+    assert "pandas" in sys.modules  # save() wrote with it: load() here reads with it
     ref = fit_recording(fogbayes.load(src), model="bias-t")
     np.testing.assert_array_equal(doc["params"]["coef"], ref["params"]["coef"])
 
