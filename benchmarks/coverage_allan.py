@@ -136,7 +136,8 @@ def main():
     ap.add_argument("--warmup", type=int, default=None, help="posterior warm-up steps")
     ap.add_argument("--draws", type=int, default=None, help="posterior draws per chain")
     ap.add_argument("--trial-warmup", type=int, default=None,
-                    help="warm-up steps of select's drop-one models")
+                    help="warm-up steps of select's drop-one models (step size only, from "
+                         "the current model's adaptation)")
     args = ap.parse_args()
     if args.trial_warmup is not None:
         SELECT["trial_warmup"] = args.trial_warmup

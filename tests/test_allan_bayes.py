@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fogbayes.allan.bayes import reported_terms, select_terms
+from fogbayes.allan.bayes import _start_without, fit_bayes, reported_terms, select_terms
 from fogbayes.allan.data import prepare
 from fogbayes.simulate.noise import allan_noise
 
@@ -46,3 +46,20 @@ def test_posterior_intervals_cover_the_truth_and_converge(selection):
     # 90 % credible intervals of a 27-min record: N to a few %, K within a factor ~2
     n_est = post.fit.terms["N"]
     assert n_est.high / n_est.low < 1.1
+
+
+def test_drop_one_models_start_from_the_current_models_adaptation(selection):
+    """A drop-one model starts from the model it is compared with: its adapted mass, the
+    dropped term's row and column replaced by the prior variance of an absent term's log,
+    which the warm-up then keeps (step size adapted only)."""
+    inverse_mass, step_size = selection.full.adaptation
+    assert inverse_mass.shape == (5, 5) and step_size > 0
+    start, step = _start_without(selection.full, "R")
+    assert step == step_size
+    np.testing.assert_array_equal(start[:4, :4], inverse_mass[:4, :4])
+    assert start[4, 4] == pytest.approx(np.pi ** 2 / 8) and not start[4, :4].any()
+    assert not start[:4, 4].any()
+    post = fit_bayes(selection.full.data, ("Q", "N", "B", "K"), seed=4, num_samples=500,
+                     start=(start, step))
+    np.testing.assert_array_equal(post.adaptation[0], start)
+    assert post.diagnostics["divergences"] == 0 and post.diagnostics["r_hat_max"] < 1.05

@@ -22,7 +22,8 @@ from .model import TERMS, AllanParams, adev
 from .data import AllanFitData, cube_root_normal, model_moments
 from .fit import AllanFit, _estimates, _mask, fit_wls
 from ..inference.convergence import converged as rule
-from ..support.programs import program
+from ..inference.nuts import on_host
+from ..support.stored import stored
 
 #: bulk-ESS floor of the convergence rule: 200 in all (the K-R ridge mixes slowly)
 ESS_FLOOR = 200.0
@@ -111,12 +112,14 @@ def _potential_gen(obs, mask, data, sheet, *, discrepancy: bool):
 
 
 @functools.lru_cache(maxsize=8)
-def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
+def _sampler(num_warmup: int, num_samples: int, discrepancy: bool, warm_start: bool = False):
     """Warmup + sampling of NUTS chains as one jitted, chain-vmapped function.
 
     Built with NumPyro's functional ``hmc`` API and compiled once per configuration and data
     shape: the data and the datasheet prior are arguments, so fitting another record of the
-    same length, or with another sheet or none, reuses it.
+    same length, or with another sheet or none, reuses it. It returns the chains' adapted
+    mass and step size too; ``warm_start``: its first argument is such an adaptation, and
+    the warm-up adapts the step size only (:func:`fogbayes.inference.nuts.chain_sampler`).
     """
     from ..inference.nuts import chain_sampler
 
@@ -131,7 +134,8 @@ def _sampler(num_warmup: int, num_samples: int, discrepancy: bool):
     # use both cores: 2.2-2.5 s against 3.9-6.4 s a five-term fit on the bench's record
     return chain_sampler(functools.partial(_potential_gen, discrepancy=discrepancy),
                          num_warmup, num_samples, target_accept_prob=0.95, on_trace=traced,
-                         chain_method="threads", store_key=("allan.bayes", discrepancy))
+                         chain_method="threads", store_key=("allan.bayes", discrepancy),
+                         warm_start=warm_start, return_adaptation=True)
 
 
 class AllanPosterior(NamedTuple):
@@ -143,15 +147,28 @@ class AllanPosterior(NamedTuple):
     diagnostics: dict       # r_hat, ess, divergences, goodness of fit, discrepancy used
     mask: np.ndarray        # (5,) terms in the model
     data: AllanFitData
+    adaptation: tuple = None  # the chains' mean inverse mass of log p (5, 5), step size
+
+
+#: warm-up steps of a drop-one model started from the current model's adaptation
+#: (:func:`select_terms`): dual averaging settles the step size in ~50 steps
+TRIAL_WARMUP = 100
+#: variance of log|x| for a normal x: an absent term's log under its half-normal prior, the
+#: mass a drop-one model gives the term it drops
+_LOG_HALF_NORMAL_VAR = np.pi ** 2 / 8
 
 
 def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 500,
               num_samples: int = NUM_SAMPLES, num_chains: int = 2,
-              discrepancy: str | bool = "auto", prior=None) -> AllanPosterior:
+              discrepancy: str | bool = "auto", prior=None, start=None,
+              start_warmup: int = TRIAL_WARMUP) -> AllanPosterior:
     """Sample the posterior (NUTS, started at the GLS estimate); see the module docstring.
 
     ``prior``: a :class:`~.datasheet.DatasheetPrior` (or a prior document, or its path): a
     log-normal prior on each term the sheet gives; None: half-normal priors throughout.
+    ``start``: ``(inverse_mass (5, 5), step_size)`` of log p from a related posterior
+    (:func:`select_terms`): ``start_warmup`` warm-up steps that adapt the step size only,
+    instead of ``num_warmup`` from the Laplace mass (a discrepancy refit warms up in full).
 
     Default sizes, 500 warm-up / 2000 draws per chain: the K-R ridge mixes slowly, so the draws
     are what ESS > 200 needs; with the warm-up starting at the Laplace mass
@@ -163,16 +180,18 @@ def fit_bayes(data: AllanFitData, terms=TERMS, *, seed: int, num_warmup: int = 5
     prior = as_prior(prior)
     mask = _mask(terms)
     wls = fit_wls(data, terms)
-    post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains,
-                discrepancy is True, prior)
+    if discrepancy is True:
+        start = None
+    post = _run(data, mask, wls.info["logp"], seed,
+                num_warmup if start is None else start_warmup, num_samples, num_chains,
+                discrepancy is True, prior, start)
     if discrepancy == "auto" and post.diagnostics["gof_p"] < GOF_LEVEL:
         post = _run(data, mask, wls.info["logp"], seed, num_warmup, num_samples, num_chains,
                     True, prior)
     return post
 
 
-@program
-def _pointwise_loglik(logp, delta, mask, data: AllanFitData, obs):
+def _pointwise_loglik_traced(logp, delta, mask, data: AllanFitData, obs):
     """log p(obs_k | draw) of every draw and lag: logp (C, D, 5), delta (C, D) -> (C, D, K).
     The data are arguments (one compiled program per shape, not per record)."""
     def one(lp, d):
@@ -181,8 +200,13 @@ def _pointwise_loglik(logp, delta, mask, data: AllanFitData, obs):
     return jax.vmap(jax.vmap(one))(logp, delta)
 
 
+# kept on disk once traced, run on the CPU like the samplers: tracing it was 0.27 s of
+# every `fogbayes allan --bayes`
+_pointwise_loglik = on_host(stored(_pointwise_loglik_traced, ("allan.pointwise_loglik",)))
+
+
 def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discrepancy,
-         prior=None):
+         prior=None, start=None):
     from numpyro.diagnostics import summary
 
     init = np.clip(init_logp, data.prior_loc - 12.0, data.prior_loc + np.log(3 * PRIOR_SCALE))
@@ -196,8 +220,14 @@ def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discr
         z0["log_delta"] = jnp.full(num_chains, np.log(0.01))
     obs, jmask = jnp.asarray(data.avar), jnp.asarray(mask)
     keys = jax.random.split(jax.random.PRNGKey(seed), num_chains)
-    zs, div = _sampler(num_warmup, num_samples, bool(discrepancy))(keys, z0, obs, jmask, data,
-                                                                   sheet)
+    lead = () if start is None else ((jnp.asarray(start[0]), jnp.asarray(start[1])),)
+    zs, div, (inverse_mass, step_size) = _sampler(
+        num_warmup, num_samples, bool(discrepancy), start is not None)(
+        keys, z0, *lead, obs, jmask, data, sheet)
+    # z is raveled in key order: "log_delta" (when sampled) comes before "logp"
+    skip = 1 if discrepancy else 0
+    adaptation = (np.asarray(inverse_mass).mean(axis=0)[skip:, skip:],
+                  float(np.exp(np.mean(np.log(np.asarray(step_size))))))
     samples = {"logp": zs["logp"]}
     logp = np.asarray(zs["logp"])  # (chains, draws, 5)
     delta = np.exp(np.asarray(zs["log_delta"])) if discrepancy else np.zeros(logp.shape[:2])
@@ -225,7 +255,18 @@ def _run(data, mask, init_logp, seed, num_warmup, num_samples, num_chains, discr
                    "the others"}
     fit = AllanFit("bayes", _estimates(med, lo, hi, mask), AllanParams(*med), converged,
                    diagnostics)
-    return AllanPosterior(fit, draws, log_lik, diagnostics, mask, data)
+    return AllanPosterior(fit, draws, log_lik, diagnostics, mask, data, adaptation)
+
+
+def _start_without(post: AllanPosterior, term: str) -> tuple:
+    """Where a model lacking ``term`` starts its warm-up: ``post``'s adaptation with the
+    term's row and column replaced by its prior variance (the term no longer meets the data)."""
+    inverse_mass, step_size = post.adaptation
+    i = TERMS.index(term)
+    inverse_mass = np.array(inverse_mass)
+    inverse_mass[i, :] = inverse_mass[:, i] = 0.0
+    inverse_mass[i, i] = _LOG_HALF_NORMAL_VAR
+    return inverse_mass, step_size
 
 
 def _goodness_of_fit(logp_on, mask, data, obs, delta):
@@ -324,14 +365,16 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
     a datasheet ``prior`` gives (the sheet says they exist; every fit uses the prior).
 
     The drop-one models are compared, not reported: they draw ``trial_samples`` per chain
-    (default a quarter of ``num_samples``, at least TRIAL_SAMPLES_MIN) after ``trial_warmup``
-    warm-up steps (default the reported models' ``num_warmup``; 200 chose the same terms as
-    500 on all 60 records of benchmarks/RESULTS_allan.md's selection check, in 0.9-1.07x the
-    time, so the default stays): the elpd
+    (default a quarter of ``num_samples``, at least TRIAL_SAMPLES_MIN): the elpd
     differences' Monte Carlo sd stays well below ELPD_THRESHOLD (a mix-A record of
     benchmarks/coverage_allan.py, six sampler seeds: 0.28-0.50 at 500 draws, 0.18-0.47 at
-    2000). The full model and the selected one are sampled at ``num_samples``: theirs are
-    the reported intervals.
+    2000). Each starts from the current model's adapted mass matrix (the dropped term's
+    row and column set to its prior variance) and step size, and its ``trial_warmup``
+    warm-up steps (default TRIAL_WARMUP) adapt the step size only: one term less leaves
+    the others' posterior geometry nearly as it was, and a full warm-up from the Laplace
+    mass was ~45 % of all leapfrog steps (benchmarks/RESULTS_allan.md section 3). The full
+    model and the selected one are sampled at ``num_samples`` after a full warm-up: theirs
+    are the reported intervals.
     """
     import warnings
 
@@ -343,7 +386,7 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
     if trial_samples is None:
         trial_samples = max(TRIAL_SAMPLES_MIN, full_samples // 4)
     trial_samples = min(trial_samples, full_samples)
-    trial_kw = kw if trial_warmup is None else dict(kw, num_warmup=trial_warmup)
+    trial_kw = dict(kw, start_warmup=TRIAL_WARMUP if trial_warmup is None else trial_warmup)
     sheet_terms = () if prior is None else tuple(prior.terms)
     current = [t for t in TERMS if t in terms]
     post = fit_bayes(data, current, seed=seed, num_samples=full_samples, **kw)
@@ -357,7 +400,8 @@ def select_terms(data: AllanFitData, terms=TERMS, *, seed: int, prior=None,
             if not cands:
                 break
             trials = {t: fit_bayes(data, [u for u in current if u != t], seed=seed,
-                                   num_samples=trial_samples, **trial_kw) for t in cands}
+                                   num_samples=trial_samples, start=_start_without(post, t),
+                                   **trial_kw) for t in cands}
             scores = _loo(post)  # the current model's, once for every candidate
             costs = {t: _compare(scores, trials[t]) for t in cands}
             worst = min(cands, key=lambda t: costs[t]["d_elpd_loo"])

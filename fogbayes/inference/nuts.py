@@ -17,7 +17,8 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                   target_accept_prob: float = 0.8, dense_mass=True,
                   chain_method: str = "vectorized", postprocess=None, on_trace=None,
                   jit: bool = True, laplace_mass: bool = True, store_key: tuple | None = None,
-                  compiler_options: dict | None = None):
+                  compiler_options: dict | None = None, warm_start: bool = False,
+                  return_adaptation: bool = False):
     """``f(keys (C,), z0 (C, ...), *args) -> (draws (C, num_samples, ...), divergences)``.
 
     ``potential_fn_gen(*args)`` returns the negative log density of the unconstrained
@@ -38,6 +39,11 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     disk once traced (:func:`fogbayes.support.stored.stored`), so that a new process skips
     tracing it. ``compiler_options``: XLA's, for the chains' program (``jax.jit``'s argument;
     None: XLA's defaults; the pool's: :data:`fogbayes.pool.normal.COMPILER_OPTIONS`).
+    ``warm_start``: the first of ``args`` is ``(inverse_mass, step_size)``, an adaptation
+    carried over from a related posterior (``return_adaptation`` of its run): the warm-up
+    starts there and adapts the step size only, keeping that mass matrix (the rest of
+    ``args`` go to ``potential_fn_gen``). ``return_adaptation``: ``f`` also returns each
+    chain's adapted ``(inverse_mass (C, d, d), step_size (C,))``.
     """
     from numpyro.infer.hmc import hmc
 
@@ -51,12 +57,19 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     def chain(key, z0, *args):
         if on_trace is not None:
             on_trace()
-        inverse_mass = (laplace_inverse_mass(potential_fn_gen(*args), z0, dense_mass)
-                        if laplace_mass else None)
-        state = init_kernel(z0, num_warmup, dense_mass=dense_mass,
-                            inverse_mass_matrix=inverse_mass,
-                            target_accept_prob=target_accept_prob, model_args=args,
-                            rng_key=key)
+        if warm_start:
+            (inverse_mass, step_size), args = args[0], args[1:]
+            state = init_kernel(z0, num_warmup, step_size=step_size, dense_mass=dense_mass,
+                                inverse_mass_matrix=inverse_mass, adapt_mass_matrix=False,
+                                target_accept_prob=target_accept_prob, model_args=args,
+                                rng_key=key)
+        else:
+            inverse_mass = (laplace_inverse_mass(potential_fn_gen(*args), z0, dense_mass)
+                            if laplace_mass else None)
+            state = init_kernel(z0, num_warmup, dense_mass=dense_mass,
+                                inverse_mass_matrix=inverse_mass,
+                                target_accept_prob=target_accept_prob, model_args=args,
+                                rng_key=key)
 
         def step(st, _):
             st = sample_kernel(st, model_args=args)
@@ -64,10 +77,12 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
 
         # one scan over warm-up and sampling (NumPyro's kernel stops adapting after
         # num_warmup steps itself): one copy of the NUTS kernel to compile, not two
-        _, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
+        last, (zs, div) = jax.lax.scan(step, state, None, length=num_warmup + num_samples)
         zs, div = jax.tree_util.tree_map(lambda a: a[num_warmup:], (zs, div))
         if postprocess is not None:
             zs = jax.vmap(lambda z: postprocess(z, *args))(zs)
+        if return_adaptation:  # the kernel stops adapting after num_warmup: final values
+            return zs, div, (last.adapt_state.inverse_mass_matrix, last.adapt_state.step_size)
         return zs, div
 
     def run(keys, z0, *args):
@@ -81,7 +96,7 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
         from ..support.stored import stored
 
         key = (store_key, num_warmup, num_samples, target_accept_prob, repr(dense_mass),
-               laplace_mass)
+               laplace_mass, warm_start, return_adaptation)
         return in_threads(on_host(stored(chain, key, compiler_options=compiler_options)))
     return on_host(program(run, compiler_options=compiler_options)) if jit else run
 
