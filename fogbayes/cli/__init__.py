@@ -156,5 +156,33 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def run() -> None:
+    """The ``fogbayes`` script and ``python -m fogbayes``: :func:`main`, then the process ends
+    as a normal exit ends it -- non-daemon threads joined, exit handlers run, the standard
+    streams flushed -- but without the interpreter's teardown of every module and object
+    (JAX's, Numba's, SciPy's), which took 0.4-0.8 s after a command that ran a compiled
+    program (benchmarks/RESULTS_interactive.md). A caller of :func:`main` keeps the normal
+    exit; an unexpected exception propagates as usual."""
+    _end_process(main())
+
+
+def _end_process(code: int) -> None:
+    import atexit
+    import os
+
+    shutdown = getattr(threading, "_shutdown", None)  # CPython's first steps at exit
+    exit_handlers = getattr(atexit, "_run_exitfuncs", None)
+    if shutdown is None or exit_handlers is None:
+        sys.exit(code)
+    shutdown()
+    exit_handlers()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed stream or a reader gone: nothing to add
+            pass
+    os._exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()
