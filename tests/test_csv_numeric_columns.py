@@ -94,3 +94,7 @@ def test_anything_but_a_number_is_left_to_pandas(body):
 
 def test_a_field_count_other_than_the_header_is_left_to_pandas():
     assert numeric_columns(b"1,2,3\n4,5,6\n", 2, ",") is None
+
+
+def test_a_separator_beyond_ascii_is_left_to_pandas():
+    assert numeric_columns("1§2\n3§4\n".encode(), 2, "§") is None

@@ -279,6 +279,8 @@ def numeric_columns(body: bytes, n_columns: int, sep: str) -> list[np.ndarray] |
     field of the column is an integer, float64 otherwise; None where a field is anything else
     (empty, text, NaN or inf spelt out, an integer beyond int64), which pandas then reads.
     """
+    if len(sep.encode()) != 1:  # a separator beyond ASCII ('§'): pandas splits it
+        return None
     allowed = _NUMERIC_BYTES.copy()
     allowed[ord(sep)] = True
     if not allowed[np.frombuffer(body, dtype=np.uint8)].all():
