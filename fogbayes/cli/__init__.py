@@ -160,7 +160,7 @@ def run() -> None:
     """The ``fogbayes`` script and ``python -m fogbayes``: :func:`main`, then the process ends
     as a normal exit ends it -- non-daemon threads joined, exit handlers run, the standard
     streams flushed -- but without the interpreter's teardown of every module and object
-    (JAX's, Numba's, SciPy's), which took 0.4-0.8 s after a command that ran a compiled
+    (JAX's, Numba's, SciPy's), which took 0.4-0.6 s after a command that ran a compiled
     program (benchmarks/RESULTS_interactive.md). A caller of :func:`main` keeps the normal
     exit; an unexpected exception propagates as usual."""
     _end_process(main())
