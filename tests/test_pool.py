@@ -135,7 +135,9 @@ def test_population_with_unresolved_units_matches_grid_quadrature():
     their parameters sampled with the population): the NUTS posterior of the population
     median and spread against the same posterior on a (mu, s) grid, each unresolved unit's
     parameter integrated out by quadrature (an independent computation), and the sampler's
-    draws of an unresolved unit's parameter against its posterior mean by quadrature."""
+    draws of an unresolved unit's parameter against its posterior mean by quadrature; the
+    same for a second fit that keeps the first one's adaptation (``start``: its mass matrix
+    and step size, 150 warm-up steps instead of 1000), as ``pool_allan``'s second pool does."""
     from numpyro.diagnostics import effective_sample_size
 
     y = np.array([[-3.9], [-3.6], [-3.75], [-3.7], [-4.6], [-6.0]])
@@ -144,7 +146,12 @@ def test_population_with_unresolved_units_matches_grid_quadrature():
     cens = np.array([[0.], [0.], [0.], [1.], [1.], [1.]])
     cov = (sd**2)[:, None, None]
     res = fit_pool(y, cov, ("b",), censored=cens, ceiling=ceil, seed=4, outliers=False)
-    assert res.diagnostics["converged"]
+    again = fit_pool(y, cov, ("b",), censored=cens, ceiling=ceil, seed=5, outliers=False,
+                     start=res.adaptation)
+    assert res.diagnostics["converged"] and again.diagnostics["converged"]
+    # kept, not adapted again: the same mass matrix and step size come back
+    np.testing.assert_allclose(again.adaptation[0], res.adaptation[0], rtol=1e-12, atol=0)
+    assert again.adaptation[1] == pytest.approx(res.adaptation[1], rel=1e-12)
     mu = np.linspace(-14.0, 2.0, 321)
     s = np.arange(0.0025, 2.5, 0.005)  # cell midpoints: the spread's lower tail is near 0
     zg = np.linspace(-8.0, 8.0, 401)
@@ -166,17 +173,38 @@ def test_population_with_unresolved_units_matches_grid_quadrature():
         logp += np.log(np.stack([m0 for m0, _ in m], axis=1))
     p = np.exp(logp - logp.max())
     p /= p.sum()
-    for draws, grid, wt in ((res.mu[:, 0], mu, p.sum(1)), (res.spread[:, 0], s, p.sum(0))):
-        cdf = np.cumsum(wt) - 0.5 * wt  # at the grid points (a coarse grid: 0.05 in mu)
-        for a in (0.05, 0.5, 0.95):
-            x = np.interp(a, cdf, grid)
-            density = np.interp(x, grid, wt) / (grid[1] - grid[0])
-            assert abs(np.quantile(draws, a) - x) < _quantile_tolerance(draws, a, density), a
-    for u, m in mom.items():  # sum over (mu, s) of p(mu, s | y) E[theta | mu, s, y_u]
-        mean = np.stack([m1 / np.maximum(m0, 1e-300) for m0, m1 in m], axis=1)
-        d = res.units[:, u, 0]
-        n_eff = float(effective_sample_size(d.reshape(4, -1)))
-        assert abs(d.mean() - np.sum(p * mean)) < 4 * d.std() / np.sqrt(n_eff), u
+    for fit in (res, again):
+        for draws, grid, wt in ((fit.mu[:, 0], mu, p.sum(1)), (fit.spread[:, 0], s, p.sum(0))):
+            cdf = np.cumsum(wt) - 0.5 * wt  # at the grid points (a coarse grid: 0.05 in mu)
+            for a in (0.05, 0.5, 0.95):
+                x = np.interp(a, cdf, grid)
+                density = np.interp(x, grid, wt) / (grid[1] - grid[0])
+                assert abs(np.quantile(draws, a) - x) < _quantile_tolerance(draws, a, density), a
+        for u, m in mom.items():  # sum over (mu, s) of p(mu, s | y) E[theta | mu, s, y_u]
+            mean = np.stack([m1 / np.maximum(m0, 1e-300) for m0, m1 in m], axis=1)
+            d = fit.units[:, u, 0]
+            n_eff = float(effective_sample_size(d.reshape(4, -1)))
+            assert abs(d.mean() - np.sum(p * mean)) < 4 * d.std() / np.sqrt(n_eff), u
+
+
+def test_a_refit_without_a_unit_starts_its_z_at_unit_inverse_mass():
+    """The rows and columns the leave-one-out refit resets are the left-out unit's z in the
+    order NumPyro ravels the sampled dict (an independent ravel: jax.flatten_util)."""
+    from jax.flatten_util import ravel_pytree
+
+    from fogbayes.pool.normal import _start_without
+
+    U, P = 5, 3
+    flat, _ = ravel_pytree({"eta": np.zeros(P), "log_s": np.zeros(P),
+                            "z": np.arange(1.0, U * P + 1).reshape(U, P)})
+    idx = np.flatnonzero((flat > 2 * P) & (flat <= 3 * P))  # unit 2's z: 7, 8, 9
+    inv = np.full((2 * P + U * P,) * 2, 0.3) + np.eye(2 * P + U * P)
+    out, step = _start_without((inv, 0.07), 2, P)
+    assert step == 0.07 and idx.tolist() == [2 * P + 2 * P + j for j in range(P)]
+    keep = np.setdiff1d(np.arange(inv.shape[0]), idx)
+    assert np.array_equal(out[np.ix_(idx, idx)], np.eye(P))
+    assert not out[np.ix_(idx, keep)].any() and not out[np.ix_(keep, idx)].any()
+    assert np.array_equal(out[np.ix_(keep, keep)], inv[np.ix_(keep, keep)])
 
 
 def test_a_far_unit_is_flagged_by_an_exact_refit_and_the_others_are_not():

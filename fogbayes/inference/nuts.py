@@ -18,7 +18,7 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
                   chain_method: str = "vectorized", postprocess=None, on_trace=None,
                   jit: bool = True, laplace_mass: bool = True, store_key: tuple | None = None,
                   compiler_options: dict | None = None, warm_start: bool = False,
-                  return_adaptation: bool = False):
+                  adapt_step_size: bool = True, return_adaptation: bool = False):
     """``f(keys (C,), z0 (C, ...), *args) -> (draws (C, num_samples, ...), divergences)``.
 
     ``potential_fn_gen(*args)`` returns the negative log density of the unconstrained
@@ -42,8 +42,10 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
     ``warm_start``: the first of ``args`` is ``(inverse_mass, step_size)``, an adaptation
     carried over from a related posterior (``return_adaptation`` of its run): the warm-up
     starts there and adapts the step size only, keeping that mass matrix (the rest of
-    ``args`` go to ``potential_fn_gen``). ``return_adaptation``: ``f`` also returns each
-    chain's adapted ``(inverse_mass (C, d, d), step_size (C,))``.
+    ``args`` go to ``potential_fn_gen``); with ``adapt_step_size=False`` it keeps the step
+    size too, and the warm-up steps only carry the chains into the posterior.
+    ``return_adaptation``: ``f`` also returns each chain's adapted
+    ``(inverse_mass (C, d, d), step_size (C,))``.
     """
     from numpyro.infer.hmc import hmc
 
@@ -61,6 +63,7 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
             (inverse_mass, step_size), args = args[0], args[1:]
             state = init_kernel(z0, num_warmup, step_size=step_size, dense_mass=dense_mass,
                                 inverse_mass_matrix=inverse_mass, adapt_mass_matrix=False,
+                                adapt_step_size=adapt_step_size,
                                 target_accept_prob=target_accept_prob, model_args=args,
                                 rng_key=key)
         else:
@@ -96,7 +99,8 @@ def chain_sampler(potential_fn_gen, num_warmup: int, num_samples: int, *,
         from ..support.stored import stored
 
         key = (store_key, num_warmup, num_samples, target_accept_prob, repr(dense_mass),
-               laplace_mass, warm_start, return_adaptation)
+               laplace_mass, warm_start, return_adaptation) + (
+            () if adapt_step_size else ("fixed step",))
         return in_threads(on_host(stored(chain, key, compiler_options=compiler_options)))
     return on_host(program(run, compiler_options=compiler_options)) if jit else run
 

@@ -364,7 +364,9 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
                   if absence[t] >= CHI2_90}
         own = _covariances(units, terms)
         units = at_population(units, tuple(median), median)
-        res, sheet = _pool(units, terms, seed, flag_level, prior, sampler, unit_cov=own)
+        # the same units and terms: the second pool keeps the first one's adaptation
+        res, sheet = _pool(units, terms, seed, flag_level, prior,
+                           {**sampler, "start": first.adaptation}, unit_cov=own)
     else:
         res, sheet = _pool(units, terms, seed, flag_level, prior, sampler)
     doc = _document(units, terms, res, sheet, prior, flag_level,

@@ -40,6 +40,7 @@ class PoolResult(NamedTuple):
     new_unit: np.ndarray    # (draws, P) a new unit of the population
     outlier_p: np.ndarray   # (U,) leave-one-out posterior-predictive p-values
     diagnostics: dict       # r_hat, ess, divergences, converged
+    adaptation: tuple = None  # the chains' mean inverse mass and step size (``start``)
 
 
 #: the variance coefficient is exp(LINEAR_POWER * theta): Allan terms enter the AVAR squared
@@ -165,18 +166,31 @@ TARGET_ACCEPT, TARGET_ACCEPT_CENSORED, WARMUP_CENSORED = 0.98, 0.995, 1000
 COMPILER_OPTIONS = {"xla_backend_optimization_level": 0}
 
 
+#: warm-up steps of a posterior started from a related one's adaptation (``start`` of
+#: :func:`fit_pool`): its mass matrix and step size are kept, these steps only carry the
+#: chains into the posterior. The sampled parameters are whitened (:func:`_mu_of`,
+#: non-centred z), so the same units with covariances moved to the population median
+#: leave the adaptation right
+START_WARMUP = 150
+
+
 @functools.lru_cache(maxsize=8)
-def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT):
+def _sampler(num_warmup: int, num_samples: int, target: float = TARGET_ACCEPT,
+             warm_start: bool = False):
     """NUTS chains over (eta, log s, z), drawn as (mu, log s, z) (:func:`_constrained`,
-    :mod:`fogbayes.inference.nuts`); the unit weights are
-    an argument, so the full fit and every leave-one-out refit share one compilation per
-    (U, P). The chains run in threads, one per core (vmapped, every chain waited at each step
-    for the deepest tree of the four); the draws are those of chains run one after another."""
+    :mod:`fogbayes.inference.nuts`), with each chain's adapted mass and step size; the unit
+    weights are an argument, so the full fit and every leave-one-out refit share one
+    compilation per (U, P). ``warm_start``: the first argument is an adaptation to keep
+    (:data:`START_WARMUP`). The chains run in threads, one per core (vmapped, every chain
+    waited at each step for the deepest tree of the four); the draws are those of chains
+    run one after another."""
     from ..inference.nuts import chain_sampler
 
     return chain_sampler(_potential, num_warmup, num_samples, target_accept_prob=target,
                          chain_method="threads", postprocess=_constrained,
-                         store_key=("pool.normal",), compiler_options=COMPILER_OPTIONS)
+                         store_key=("pool.normal",), compiler_options=COMPILER_OPTIONS,
+                         warm_start=warm_start, adapt_step_size=not warm_start,
+                         return_adaptation=True)
 
 
 def _start(y, cov, num_chains, rng):
@@ -226,23 +240,43 @@ def shrink(y, cov, mu, spread, rng, cens=None, theta=None) -> np.ndarray:
 
 
 def _run(y, cov, cens, ceil, w, centre, mu_sd, log_scale, z0, key, num_warmup, num_samples,
-         num_chains):
+         num_chains, start=None):
     """One posterior of (mu, s) with unit weights ``w``: draws (D, P) twice, diagnostics,
-    and the draws (D, U, P) of the units' parameters (meaningful for censored components)."""
+    the draws (D, U, P) of the units' parameters (meaningful for censored components) and
+    the chains' adaptation (mean inverse mass, geometric-mean step size). ``start``: an
+    adaptation to keep (:data:`START_WARMUP`)."""
     keys = jax.random.split(key, num_chains)
     target = TARGET_ACCEPT
     if np.any(cens):
         target, num_warmup = TARGET_ACCEPT_CENSORED, max(num_warmup, WARMUP_CENSORED)
-    zs, div = _sampler(num_warmup, num_samples, target)(keys, z0, jnp.asarray(y), jnp.asarray(cov),
-                                               jnp.asarray(cens), jnp.asarray(ceil),
-                                               jnp.asarray(w),
-                                               jnp.asarray(centre), jnp.asarray(mu_sd),
-                                               jnp.asarray(log_scale))
+    lead = ()
+    if start is not None:
+        num_warmup = START_WARMUP
+        lead = ((jnp.asarray(start[0]), jnp.asarray(start[1])),)
+    zs, div, (inverse_mass, step_size) = _sampler(num_warmup, num_samples, target,
+                                                  start is not None)(
+        keys, z0, *lead, jnp.asarray(y), jnp.asarray(cov), jnp.asarray(cens),
+        jnp.asarray(ceil), jnp.asarray(w), jnp.asarray(centre), jnp.asarray(mu_sd),
+        jnp.asarray(log_scale))
     zs = {k: np.asarray(v) for k, v in zs.items()}
     U, P = y.shape
     mu, spread = zs["mu"].reshape(-1, P), np.exp(zs["log_s"]).reshape(-1, P)
     theta = mu[:, None, :] + spread[:, None, :] * zs["z"].reshape(-1, U, P)
-    return mu, spread, _summary(zs, div), theta
+    adaptation = (np.asarray(inverse_mass).mean(axis=0),
+                  float(np.exp(np.mean(np.log(np.asarray(step_size))))))
+    return mu, spread, _summary(zs, div), theta, adaptation
+
+
+def _start_without(adaptation, u: int, P: int) -> tuple:
+    """The pool's adaptation for its refit without unit ``u``: the unit's z (raveled after
+    eta and log s, NumPyro's key order) no longer meet its data and are standard normal,
+    so their rows and columns of the inverse mass become the identity's."""
+    inverse_mass, step_size = adaptation
+    inverse_mass = np.array(inverse_mass)
+    idx = 2 * P + u * P + np.arange(P)
+    inverse_mass[idx, :] = inverse_mass[:, idx] = 0.0
+    inverse_mass[idx, idx] = 1.0
+    return inverse_mass, step_size
 
 
 def _log_lik_table(y, cov, cens, ceil, mu, spread, theta) -> np.ndarray:
@@ -291,7 +325,7 @@ REFIT_FACTOR = 10.0
 
 def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
              flag_level: float = 0.01, mu_prior=None, amplitude_scale=None, outliers: bool = True,
-             outlier_test: str = "joint", unit_cov=None,
+             outlier_test: str = "joint", unit_cov=None, start=None,
              num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 4) -> PoolResult:
     """Posterior of the population model (module docstring) from estimates ``y`` (U, P) with
     covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
@@ -309,13 +343,15 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
     docstring). ``unit_cov`` (U, P, P): the covariance of each unit's resolved components
     where the unit is taken alone -- its outlier test and its shrunk draws given the
     population -- when it differs from ``cov`` (the pool's model of the population);
-    censored components keep ``cov``'s width.
+    censored components keep ``cov``'s width. ``start``: the ``adaptation`` of a pool of
+    the same units and terms with other covariances; its mass matrix and step size are
+    kept (:data:`START_WARMUP`).
 
     Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
     :func:`fogbayes.stats.psis.psislw`); a unit whose Pareto k exceeds PARETO_K_MAX or whose
     p-value lies within REFIT_FACTOR x ``flag_level`` is refitted exactly without it (the
-    same compiled sampler with its weight set to 0, half the chains), so a flag never rests
-    on the approximation.
+    same compiled sampler with its weight set to 0, half the chains, keeping this posterior's
+    adaptation: :func:`_start_without`), so a flag never rests on the approximation.
     """
     from ..stats.psis import psislw
 
@@ -356,13 +392,13 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
                             log_scale=log_scale, z0=z0,
                             num_warmup=num_warmup,
                             num_samples=num_samples, num_chains=num_chains)
-    mu, spread, diagnostics, theta = run(np.ones(U), key=key)
+    mu, spread, diagnostics, theta, adaptation = run(np.ones(U), key=key, start=start)
     if not outliers:
         diagnostics.update(pareto_k=[], loo_method=["none"] * U, refits=0, refits_converged=0)
         units = shrink(y, ucov, mu, spread, rng, cens, theta)
         new_unit = mu + spread * rng.standard_normal(mu.shape)
         return PoolResult(tuple(names), mu, spread, units, new_unit, np.full(U, np.nan),
-                          diagnostics)
+                          diagnostics, adaptation)
     # leave-one-out on the joint posterior of (mu, s, theta): the ratio 1 / p(y_u | ...)
     ll = _log_lik_table(y, cov, cens, ceil, mu, spread, theta)
     log_w, k_hat = psislw(-ll.T)  # (U, D) log ratios 1 / p(y_u | draw); k > 0.7: refitted
@@ -376,8 +412,9 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
             # half the chains: the refit's draws serve one p-value, a mean over them (on
             # two cores the time of one chain instead of two)
             half = max(1, num_chains // 2)
-            mu_u, s_u, diag_u, _ = run(w, key=jax.random.fold_in(key, u + 1), num_chains=half,
-                                       z0={k: v[:half] for k, v in z0.items()})
+            mu_u, s_u, diag_u, _, _ = run(w, key=jax.random.fold_in(key, u + 1),
+                                          num_chains=half, start=_start_without(adaptation, u, P),
+                                          z0={k: v[:half] for k, v in z0.items()})
             p = _predictive_p(y[u], tcov[u], cens[u], mu_u, s_u, test=outlier_test)
             refits.append(diag_u["converged"])
             method.append("refit")
@@ -388,4 +425,5 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
                        refits_converged=int(sum(refits)))
     units = shrink(y, ucov, mu, spread, rng, cens, theta)
     new_unit = mu + spread * rng.standard_normal(mu.shape)
-    return PoolResult(tuple(names), mu, spread, units, new_unit, outlier_p, diagnostics)
+    return PoolResult(tuple(names), mu, spread, units, new_unit, outlier_p, diagnostics,
+                      adaptation)
