@@ -326,6 +326,13 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
     return out
 
 
+#: warm-up and draws per chain of the first pool (:func:`pool_allan`), whose medians place
+#: the units' covariances (a smooth function of them) and whose adapted mass matrix and step
+#: size the second pool keeps: two chains of 250 draws (ESS of mu ~120-250) put a median
+#: within ~0.1 posterior sd
+FIRST_WARMUP, FIRST_SAMPLES = 500, 250
+
+
 def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS,
                seed: int = 0, flag_level: float = FLAG_LEVEL, prior=None,
                covariance_at: str = "population", outlier_test: str = "each",
@@ -353,9 +360,11 @@ def pool_allan(units: Sequence[UnitFit], *, terms: Sequence[str] = DEFAULT_TERMS
     sampler = {**sampler, "outlier_test": outlier_test}
     first = None
     if covariance_at == "population" and any(u.data is not None for u in units):
-        # the first pool serves only its medians: half the chains (on two cores the time
-        # of one); their ESS of ~700 places a median within ~0.05 posterior sd
-        first_sampler = {**sampler, "num_chains": max(1, sampler.get("num_chains", 4) // 2)}
+        # the first pool serves only its medians and its adaptation: half the chains (on
+        # two cores the time of one), FIRST_WARMUP and FIRST_SAMPLES
+        first_sampler = {**sampler, "num_chains": max(1, sampler.get("num_chains", 4) // 2),
+                         "num_warmup": sampler.get("num_warmup", FIRST_WARMUP),
+                         "num_samples": min(FIRST_SAMPLES, sampler.get("num_samples", 1000))}
         first, _ = _pool(units, terms, seed, flag_level, prior, first_sampler, outliers=False)
         # only where the population resolves a term is its median a better place than the
         # unit's own estimate

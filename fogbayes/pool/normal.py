@@ -152,11 +152,11 @@ def _potential(y, cov, cens, ceil, w, centre, mu_sd, log_scale):
     return potential
 
 
-#: NUTS target acceptance and least warm-up: resolved components only, and with censored
+#: NUTS target acceptance and default warm-up: resolved components only, and with censored
 #: components sampled (their likelihood is level below and steep near the estimate: at 0.98
 #: and 500 warm-up the four 1 h units of benchmarks/RESULTS_pool.md gave R-hat 1.011 or a
 #: divergence; at 0.995 and 1000 neither, on sampler seeds 0, 2 and 3)
-TARGET_ACCEPT, TARGET_ACCEPT_CENSORED, WARMUP_CENSORED = 0.98, 0.995, 1000
+TARGET_ACCEPT, TARGET_ACCEPT_CENSORED, WARMUP, WARMUP_CENSORED = 0.98, 0.995, 500, 1000
 
 
 #: XLA compiles the pool's chains without LLVM's optimisations: a small potential whose
@@ -246,9 +246,9 @@ def _run(y, cov, cens, ceil, w, centre, mu_sd, log_scale, z0, key, num_warmup, n
     the chains' adaptation (mean inverse mass, geometric-mean step size). ``start``: an
     adaptation to keep (:data:`START_WARMUP`)."""
     keys = jax.random.split(key, num_chains)
-    target = TARGET_ACCEPT
-    if np.any(cens):
-        target, num_warmup = TARGET_ACCEPT_CENSORED, max(num_warmup, WARMUP_CENSORED)
+    target = TARGET_ACCEPT_CENSORED if np.any(cens) else TARGET_ACCEPT
+    if num_warmup is None:
+        num_warmup = WARMUP_CENSORED if np.any(cens) else WARMUP
     lead = ()
     if start is not None:
         num_warmup = START_WARMUP
@@ -326,7 +326,8 @@ REFIT_FACTOR = 10.0
 def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
              flag_level: float = 0.01, mu_prior=None, amplitude_scale=None, outliers: bool = True,
              outlier_test: str = "joint", unit_cov=None, start=None,
-             num_warmup: int = 500, num_samples: int = 1000, num_chains: int = 4) -> PoolResult:
+             num_warmup: int | None = None, num_samples: int = 1000,
+             num_chains: int = 4) -> PoolResult:
     """Posterior of the population model (module docstring) from estimates ``y`` (U, P) with
     covariances ``cov`` (U, P, P), and each unit's leave-one-out outlier p-value.
     ``censored`` (U, P) marks components a unit does not resolve: y is then its estimate,
@@ -345,7 +346,8 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
     population -- when it differs from ``cov`` (the pool's model of the population);
     censored components keep ``cov``'s width. ``start``: the ``adaptation`` of a pool of
     the same units and terms with other covariances; its mass matrix and step size are
-    kept (:data:`START_WARMUP`).
+    kept (:data:`START_WARMUP`). ``num_warmup``: None, WARMUP (WARMUP_CENSORED where a
+    component is censored).
 
     Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
     :func:`fogbayes.stats.psis.psislw`); a unit whose Pareto k exceeds PARETO_K_MAX or whose
