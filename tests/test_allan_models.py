@@ -109,3 +109,20 @@ def test_covariance_model_matches_monte_carlo(noise):
     mc = np.corrcoef(V.T)
     # adjacent-octave correlations: 0.4 (quantization), ~0.5 (white), ~0.88 (rrw); MC se ~0.03
     assert np.max(np.abs(np.diag(corr, 1) - np.diag(mc, 1))) < 0.1
+
+
+def test_records_of_one_length_share_their_covariance_tensors_read_only():
+    """The tensors depend on the tau grid only: two records of one length (a pool's units)
+    get the same read-only arrays, equal to a fresh build of that grid."""
+    from fogbayes.allan.data import prepare
+    from fogbayes.stats.allan_cov import _tensors
+
+    rng = np.random.default_rng(5)
+    a, b = (prepare(rng.normal(size=4096), 10.0) for _ in range(2))
+    assert a.tensors is b.tensors
+    with pytest.raises(ValueError):
+        a.tensors.T[0, 0, 0, 0] = 1.0
+    fresh = _tensors.__wrapped__(tuple(int(m) for m in a.tensors.ms),
+                                 tuple(float(c) for c in a.tensors.counts))
+    for x, y in zip(a.tensors, fresh):
+        np.testing.assert_array_equal(x, y)

@@ -11,7 +11,6 @@ is the noise and no gaps (check: benchmarks/RESULTS_plan.md).
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from typing import NamedTuple
 
 import numpy as np
@@ -20,7 +19,7 @@ from ..errors import FogbayesError
 from ..allan.data import MIN_TAUS, AllanFitData, log_moments, model_moments
 from ..allan.fit import PENALTY_SD  # the fit's own weak penalty: same se
 from ..allan.model import TERMS, UNITS, AllanParams, avar, term_avar
-from ..stats.allan_cov import CovTensors, covariance_tensors
+from ..stats.allan_cov import covariance_tensors
 from ..stats.allan_stencils import static_counts
 from ..stats.taus import cluster_sizes
 from ..support.tails import norm_ppf
@@ -69,11 +68,6 @@ def se_for_width(precision: float, level: float = 0.9) -> float:
     return float(np.arcsinh(precision) / z_value(level))
 
 
-@lru_cache(maxsize=512)
-def _tensors(ms: tuple, counts: tuple) -> CovTensors:
-    return covariance_tensors(np.array(ms), np.array(counts))
-
-
 def octave_grid(n: int, fs: float, tau_min: float | None = None) -> tuple[tuple, tuple]:
     """Cluster sizes and term counts of the octave fit of an ``n``-sample gap-free record
     (the grid of ``allan_deviation(..., taus="octave")``), from ``tau_min`` s on."""
@@ -92,7 +86,7 @@ def expected_data(params, fs: float, n: int, *, tau_min: float | None = None) ->
         raise PlanError(f"{n} samples at {fs:g} Hz give no octave tau from "
                         f"{(1.0 / fs if tau_min is None else tau_min):g} s on",
                         fix="plan a longer record")
-    tensors = _tensors(ms, counts)
+    tensors = covariance_tensors(ms, counts)
     tau = np.array(ms, float) / fs
     p = np.asarray(tuple(params), float)
     data = AllanFitData(tau, np.asarray(avar(p, tau)), np.full(tau.size, np.nan),

@@ -12,6 +12,7 @@ the noise scales (tensor ``T``, built in NumPy, evaluated in JAX); a rate ramp `
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import numpy as np
@@ -94,7 +95,22 @@ def _lags(m1: int, m2: int, M1: int, M2: int, flicker: bool):
 
 def covariance_tensors(ms, counts) -> CovTensors:
     """Build :class:`CovTensors` for overlapping AVAR at cluster sizes ``ms`` (term counts
-    ``counts``, e.g. ``n + 1 - 2m`` without gaps)."""
+    ``counts``, e.g. ``n + 1 - 2m`` without gaps).
+
+    The tensors depend on the tau grid and the record's length only, so they are kept for
+    the last :data:`KEPT_GRIDS` grids: the units of a pool, or the records of a fleet, of one
+    length share them (read-only arrays)."""
+    return _tensors(tuple(int(m) for m in np.asarray(ms).ravel()),
+                    tuple(float(c) for c in np.asarray(counts).ravel()))
+
+
+#: tau grids whose :func:`covariance_tensors` are kept (each (K, K, 4, 4) floats, ~0.1 MB
+#: at K = 25; `fogbayes plan` compares hundreds of candidate lengths)
+KEPT_GRIDS = 512
+
+
+@functools.lru_cache(maxsize=KEPT_GRIDS)
+def _tensors(ms: tuple, counts: tuple) -> CovTensors:
     ms = np.asarray(ms, dtype=int)
     counts = np.asarray(counts, dtype=float)
     K, P = ms.size, len(NOISE_TYPES)
@@ -120,6 +136,8 @@ def covariance_tensors(ms, counts) -> CovTensors:
             norm = (2.0 * m1 * m1 * M1) * (2.0 * m2 * m2 * M2)
             T[j, k] = T[k, j] = 2.0 / norm * inner
             U[j, k] = U[k, j] = 4.0 * (m1 * m1) * (m2 * m2) / norm * linear
+    for a in (ms, counts, expect, T, U):
+        a.setflags(write=False)
     return CovTensors(ms, counts, expect, T, U)
 
 
