@@ -329,7 +329,9 @@ def check_units(units: Sequence[UnitFit], terms: Sequence[str]) -> list[str]:
 #: warm-up and draws per chain of the first pool (:func:`pool_allan`), whose medians place
 #: the units' covariances (a smooth function of them) and whose adapted mass matrix and step
 #: size the second pool keeps: two chains of 250 draws (ESS of mu ~120-250) put a median
-#: within ~0.1 posterior sd
+#: within ~0.1 posterior sd. Its R-hat (up to 1.03 on four 1 h units) is not reported; the
+#: second pool's is, and it met the convergence rule as often as after a first pool of 1000
+#: warm-up steps and 1000 draws (benchmarks/RESULTS_pool.md)
 FIRST_WARMUP, FIRST_SAMPLES = 500, 250
 
 

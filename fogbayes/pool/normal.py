@@ -346,8 +346,8 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
     population -- when it differs from ``cov`` (the pool's model of the population);
     censored components keep ``cov``'s width. ``start``: the ``adaptation`` of a pool of
     the same units and terms with other covariances; its mass matrix and step size are
-    kept (:data:`START_WARMUP`). ``num_warmup``: None, WARMUP (WARMUP_CENSORED where a
-    component is censored).
+    kept (:data:`START_WARMUP`). ``num_warmup``: warm-up steps; None: WARMUP, or
+    WARMUP_CENSORED where a component is censored.
 
     Leave-one-out: the full posterior's draws reweighted by 1 / p(y_u | mu, S) (PSIS,
     :func:`fogbayes.stats.psis.psislw`); a unit whose Pareto k exceeds PARETO_K_MAX or whose
