@@ -51,12 +51,12 @@ def test_fit_gls_gives_the_coefficients_of_the_loop_with_no_step(both):
 
 
 def test_bias_t_at_the_fits_default_order_is_the_loop_at_that_order(record):
-    # `fogbayes fit -m bias-t --estimator gls` takes the fit's default order (3); the loop
-    # given the same order and no step writes the same coefficients
+    # `fogbayes fit -m bias-t --estimator gls` and the loop with no step, neither given
+    # orders, take the one default (3) and write the same coefficients
     d, _ = record
     assert cli.main(["-q", "fit", str(d / "rec.csv"), "-m", "bias-t", "--estimator", "gls",
                      "--json", str(d / "fit_bt.json")]) == 0
-    assert cli.main(["-q", "loop", str(d / "rec.csv"), "-m", "bias-t", "--orders", "3",
+    assert cli.main(["-q", "loop", str(d / "rec.csv"), "-m", "bias-t",
                      "--max-steps", "0", "--json", str(d / "loop_bt.json"),
                      "--compensated", str(d / "loop_bt.csv")]) == 0
     a, b = (json.loads((d / n).read_text())["calibration"] for n in ("fit_bt.json", "loop_bt.json"))

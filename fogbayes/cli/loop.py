@@ -55,8 +55,8 @@ def loop(
     report: Path = typer.Option(None, "--report", show_default=False,
                                 help="HTML report of the loop to write."),
     orders: str = typer.Option(None, "--orders", "--order",
-                               help="Base orders: bias-t 'n' (default 2); thermal 'n' or "
-                                    "'n,m' (T, dT/dt; default 2); composite "
+                               help="Base orders: bias-t 'n' (default 3); thermal 'n' or "
+                                    "'n,m' (T, dT/dt; default 2,2); composite "
                                     "'s1,s2,u0[,u1]' as fit's (three values: u1 = u0; u1 "
                                     "'-': no U1(T) t drift; default 0,0,2,-)."),
     alpha: float = typer.Option(0.01, help="Family-wise false-effect level of each step."),

@@ -17,6 +17,7 @@ from .context import Context
 from ..effects.terms import Term
 from ..errors import FogbayesError, MissingColumnError
 from ..composite.model import OrdersError, read_orders
+from ..thermal.workflow import DEFAULT_ORDERS
 from ..effects import REGISTRY
 from ..effects.periodic import Periodic
 from ..effects.simulator_only import MarkovNoise
@@ -58,10 +59,11 @@ def _need_temperature(ctx: Context, model: str, source) -> None:
 def parse_orders(model: str, orders: str | None) -> tuple[int, ...]:
     """Orders for a base model: bias-t "n" (T order); thermal "n" or "n,m" (T order, dT/dt
     order; "n" sets both, as ``fogbayes fit``); composite "s1,s2,u0[,u1]"."""
-    default = {"bias-t": (3,), "thermal": (2, 2), "composite": (0, 0, 2, None),
-               "allan": ()}[model]
     if orders is None:
-        return default
+        if model in DEFAULT_ORDERS:  # ``fogbayes fit``'s defaults: one table
+            orders = DEFAULT_ORDERS[model]
+        else:
+            return {"composite": (0, 0, 2, None), "allan": ()}[model]
     if model == "composite":
         try:
             return read_orders(orders)
