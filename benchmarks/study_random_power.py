@@ -15,8 +15,10 @@ The loop adds an effect only when its family-wise p-value over the record's n ca
 below alpha = 0.01 (Sidak). Even ignoring the price of the searched parameter (m_eff = 1), a
 term whose LR is below ``chi2_dof.isf(1 - (1 - alpha)^(1/n))`` cannot pass that gate under
 the noise model the record's data choose: the oracle's own evidence is the ceiling of any
-rule held to the loop's false-effect level. The summary counts the material effects above
-that ceiling and the loop's right-first rate among them. Rows go to
+rule held to the loop's false-effect level. The same gate at alpha = 0.05 (issue 53's
+false-effect target on clean records) is a second, looser ceiling. The summary counts, at
+both levels, the material effects above the gate and the records on which the gated oracle
+(:func:`summarise`) ends within 1.3x the oracle, beside the loop's figures. Rows go to
 ``benchmarks/study_random_power_<set>.jsonl`` (resumable); the loop's rows are read from
 ``study_random_<set>.jsonl`` and not changed.
 """
@@ -36,6 +38,8 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.dirname(HERE))
 
 ALPHA = 0.01
+#: issue 53's false-effect target on clean records (5 %): the level of the second ceiling
+TARGET_ALPHA = 0.05
 
 
 def oracle_evidence(row: dict) -> dict:
@@ -58,40 +62,93 @@ def oracle_evidence(row: dict) -> dict:
     o = free_fit(ctx, ctx.spec, base, case["family"])
     if o is None:
         return {"seed": row["seed"], "lr": 0.0, "dof": 0, "n_candidates": n_cand,
-                "lr_needed": float("inf")}
+                "lr_needed": float("inf"), "lr_needed_target": float("inf")}
     dof = int(o.X.shape[1] - fit0.X.shape[1])
     lr = max(2.0 * (float(o.loglik) - float(fit0.loglik)), 0.0)
-    per = 1.0 - (1.0 - ALPHA) ** (1.0 / max(n_cand, 1))
+    def needed(alpha):  # Sidak over the record's candidates, no price for the search
+        return float(chi2.isf(1.0 - (1.0 - alpha) ** (1.0 / max(n_cand, 1)), max(dof, 1)))
+
     return {"seed": row["seed"], "lr": lr, "dof": dof, "n_candidates": n_cand,
-            "lr_needed": float(chi2.isf(per, max(dof, 1)))}
+            "lr_needed": needed(ALPHA), "lr_needed_target": needed(TARGET_ALPHA)}
+
+
+def _above(p: dict, level: str) -> bool:
+    return p["lr"] >= p["lr_needed" if level == "loop" else "lr_needed_target"]
 
 
 def summarise(rows: list[dict], power: dict[int, dict]) -> str:
-    mat = [r for r in rows if r["material"] and r["seed"] in power]
-    ok = [r for r in mat if power[r["seed"]]["lr"] >= power[r["seed"]]["lr_needed"]]
-    low = [r for r in mat if r not in ok]
-    lines = [f"material effects scored: {len(mat)}",
-             f"oracle's LR above the loop's family-wise gate (alpha {ALPHA}, no search price): "
-             f"{len(ok)}/{len(mat)}",
-             f"right first among those: {sum(r['first_right'] for r in ok)}/{len(ok)}",
-             f"right first among the rest: {sum(r['first_right'] for r in low)}/{len(low)}",
-             f"largest share any rule at the loop's level could reach: "
-             f"{len(ok) + sum(r['first_right'] for r in low)}/{len(mat)} (the loop's "
-             f"right-first rate counts a lucky pass below the gate)", "",
-             "| family | material | oracle above the gate | right first above the gate |",
-             "|---|---|---|---|"]
+    """The two ceilings at the loop's level and at the target's, beside the loop's figures.
+
+    Detection: the material effects whose oracle LR passes the gate. Calibration: the
+    share of all records on which the *gated* oracle (the told family where its LR passes
+    the gate, the base where it does not; a clean record keeps the base, which is the
+    oracle) ends within 1.3x the oracle: no rule held to that level and told less could
+    do better on both counts at once.
+    """
+    scored = [r for r in rows if not r["family"] or r["seed"] in power]
+    mat = [r for r in scored if r["material"]]
+    lines = [f"records scored: {len(scored)} ({len(mat)} material)"]
+    for level, alpha in (("loop", ALPHA), ("target", TARGET_ALPHA)):
+        ok = [r for r in mat if _above(power[r["seed"]], level)]
+        within = sum(1 for r in scored if not r["family"] or _above(power[r["seed"]], level)
+                     or r["err_base"] <= 1.3 * r["err_oracle"])
+        lines += [f"family-wise alpha {alpha} ({level}'s level): material effects above the "
+                  f"gate {len(ok)}/{len(mat)} ({100 * len(ok) / max(len(mat), 1):.0f} %); "
+                  f"gated oracle within 1.3x the oracle on {within}/{len(scored)} records "
+                  f"({100 * within / max(len(scored), 1):.0f} %)"]
+    ok = [r for r in mat if _above(power[r["seed"]], "loop")]
+    lines += [f"the loop: right first {sum(r['first_right'] for r in mat)}/{len(mat)} material "
+              f"({sum(r['first_right'] for r in ok)} of the {len(ok)} above its gate); within "
+              f"1.3x the oracle on {sum(r['err_loop'] <= 1.3 * r['err_oracle'] for r in scored)}"
+              f"/{len(scored)} records", "",
+              "| family | material | above the loop's gate | above the target's | right first |",
+              "|---|---|---|---|---|"]
     for fam in sorted({r["family"] for r in mat}):
         m = [r for r in mat if r["family"] == fam]
-        a = [r for r in ok if r["family"] == fam]
-        lines.append(f"| {fam} | {len(m)} | {len(a)} | {sum(r['first_right'] for r in a)} |")
+        lines.append(f"| {fam} | {len(m)} | "
+                     f"{sum(_above(power[r['seed']], 'loop') for r in m)} | "
+                     f"{sum(_above(power[r['seed']], 'target') for r in m)} | "
+                     f"{sum(r['first_right'] for r in m)} |")
     return "\n".join(lines)
+
+
+def misses(rows: list[dict], power: dict[int, dict]) -> str:
+    """Where the loop stopped on each material effect above its gate that it did not find
+    first: another family first, refused by the held-out check, refitted but above alpha,
+    screened but not refitted, or not screened."""
+    out = []
+    for r in rows:
+        p = power.get(r["seed"])
+        if not (r["material"] and p and _above(p, "loop") and not r["first_right"]):
+            continue
+        fam = r["family"]
+        refitted = {c["effect"]: c for c in r.get("refitted") or []}
+        screened = [c["effect"] for c in r.get("screening") or []]
+        refused = [k.get("effect") if isinstance(k, dict) else k for k in r.get("not_kept") or []]
+        if r["deterministic"]:
+            why = f"another family first: {r['deterministic'][0]}"
+        elif fam in refused:
+            why = "refused by the held-out check"
+        elif fam in refitted:
+            c = refitted[fam]
+            why = (f"refitted: log10 p {c['log10_p']:.2f} (one candidate), ratio "
+                   f"{c['likelihood_ratio']:.1f}, Bartlett factor {c.get('bartlett_factor')}")
+        elif fam in screened:
+            why = f"screened #{screened.index(fam) + 1}, not refitted"
+        else:
+            why = "not screened"
+        out.append(f"{r['seed']} {fam}: oracle ratio {p['lr']:.1f} (gate {p['lr_needed']:.1f}); "
+                   f"{why}; error {r['err_loop'] / r['err_oracle']:.2f}x the oracle's")
+    return "\n".join(out)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--set", choices=("dev", "report", "report2"), default="dev")
+    ap.add_argument("--set", choices=("dev", "report", "report2", "dev2"), default="dev")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--summary", action="store_true")
+    ap.add_argument("--misses", action="store_true",
+                    help="also list the material effects above the gate the loop missed")
     a = ap.parse_args()
     rows = [json.loads(x) for x in open(os.path.join(HERE, f"study_random_{a.set}.jsonl"))]
     out = os.path.join(HERE, f"study_random_power_{a.set}.jsonl")
@@ -108,6 +165,8 @@ def main() -> None:
                 f.flush()
                 print(p, flush=True)
     print(summarise(rows, power))
+    if a.misses:
+        print(misses(rows, power))
 
 
 if __name__ == "__main__":
