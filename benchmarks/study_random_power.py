@@ -127,6 +127,8 @@ def misses(rows: list[dict], power: dict[int, dict]) -> str:
         refused = [k.get("effect") if isinstance(k, dict) else k for k in r.get("not_kept") or []]
         if r["deterministic"]:
             why = f"another family first: {r['deterministic'][0]}"
+        elif "screening" not in r:
+            why = "nothing added (this set's rows do not record the stop's evidence)"
         elif fam in refused:
             why = "refused by the held-out check"
         elif fam in refitted:
