@@ -8,7 +8,8 @@ theta_u ~ N(mu + S(S + Sigma_u)^-1 (y_u - mu), S - S(S + Sigma_u)^-1 S); a new u
 Outliers, leave-one-out (vmapped): p_u = E[P(chi2_P > (y_u - mu)'(S + Sigma_u)^-1 (y_u - mu))], or
 per component (``outlier_test="each"``), Bonferroni. Censored components: likelihood
 exp(-x'(4 Sigma_cc)^-1 x / 2), x_t = e^{2(theta_t - y_ut)} - 1 (:func:`unit_log_lik`,
-:func:`censored_log_lik`), sampled non-centred.
+:func:`censored_log_lik`), sampled non-centred; the leave-one-out table integrates them out
+by quadrature (:func:`censored_marginal`), its ratios 1/p(y_u | mu, s).
 """
 
 from __future__ import annotations
@@ -84,6 +85,175 @@ def unit_log_lik(yu, cu, cens, mu, s, theta, ceil):
     x = jnp.where(cens > 0, censored_shift(theta, yu, jnp.where(cens > 0, ceil, yu + 1.0)), 0.0)
     zc = jax.scipy.linalg.solve_triangular(Lc, x, lower=True)
     return gauss - 0.5 * zc @ zc
+
+
+def _shift_np(theta, y, ceiling):
+    """:func:`censored_shift` in NumPy (the grids are built outside the sampler)."""
+    a = np.minimum(LINEAR_POWER * (theta - ceiling), _MAX_EXPONENT)
+    b = LINEAR_POWER * (y - ceiling)
+    log_rest = np.log1p(-np.exp(b))
+    return np.logaddexp(a, log_rest) - np.logaddexp(b, log_rest)
+
+
+
+#: nodes of a censored component's quadrature grid (:func:`censored_grids`) by the most
+#: components one unit censors, (plateau, core, tail): the tensor grid of a unit has M^D
+#: points, M their sum. The error of its marginal against a fine grid:
+#: tests/test_pool.py (test_censored_marginal_matches_a_fine_grid)
+GRID_NODES = {1: (24, 92, 5), 2: (24, 92, 5), 3: (8, 28, 4)}
+#: a component's core spans x in [max(x(-inf), -X_SPAN sd), X_SPAN sd], its tail nodes go on
+#: to (X_SPAN + X_TAIL) sd, where the likelihood is below exp(-60); beyond the grid the
+#: likelihood is held at its last node's value
+X_SPAN, X_TAIL = 6.0, 5.0
+#: singular values of a unit's two-component likelihood grid below this share of the largest
+#: are dropped: the grid's likelihood is then sum_r a_r(theta_1) b_r(theta_2) to ~1e-10
+LOW_RANK_TOL = 1e-10
+#: the terms kept (the 1 h units' grids need 11-14 to LOW_RANK_TOL, at most M)
+LOW_RANK = 20
+
+
+def _component_nodes(y, c, var, counts):
+    """Increasing nodes theta of one censored component's grid (``counts``: plateau, core,
+    tail): uniform in the shift x (:func:`censored_shift`, in which the likelihood is normal,
+    variance ``var``) over the core [max(x(-inf), -X_SPAN sd), X_SPAN sd], mapped to
+    theta = c + log(e^x - e^x(-inf)) / 2, then ``tail`` coarser nodes above it (and below
+    it where the plateau x(-inf) lies beyond the core). Where the plateau lies inside, the
+    plateau nodes approach it geometrically, x - x(-inf) from the core's spacing h down to
+    1e-9 var / |x(-inf)|, where the likelihood is level to ~1e-9 (it is held at the lowest
+    node's value below)."""
+    Mp, Mx, Mt = counts
+    sd = np.sqrt(var)
+    log_rest = np.log1p(-np.exp(LINEAR_POWER * (y - c)))
+    hi = X_SPAN * sd
+    tail = hi + np.linspace(0.0, X_TAIL * sd, Mt + 1)[1:]
+    if log_rest > -hi:
+        core = np.linspace(log_rest, hi, Mx + 1)[1:]
+        h = core[1] - core[0]
+        eps = min(1e-9 * var / max(abs(log_rest), sd), 0.5 * h)
+        x = np.concatenate([log_rest + h * (eps / h) ** (np.arange(Mp, 0, -1) / Mp), core, tail])
+    else:
+        low = -hi - np.linspace(0.0, X_TAIL * sd, Mt + 1)[:0:-1]
+        low = np.maximum(low, log_rest + 1e-3 * sd)
+        x = np.concatenate([low, np.linspace(-hi, hi, Mp + Mx), tail])
+    # e^x - e^log_rest = rest (e^(x - log_rest) - 1): precise near the plateau
+    return c + (log_rest + np.log(np.expm1(x - log_rest))) / LINEAR_POWER
+
+
+def censored_grids(y, cov, cens, ceil):
+    """Each unit's quadrature grid of its censored components (:func:`censored_marginal`):
+    ``slots`` (U, D) the components (padding: component 0, the likelihood constant along it),
+    ``nodes`` (U, D, M) increasing parameters theta and ``lik`` (U, M, ..., M) the
+    censored likelihood exp(-x' Sigma_cc^-1 x / 2) at the tensor grid's points, D the most
+    components a unit censors (0: none).
+
+    Per component the nodes are :func:`_component_nodes`; with two components the grid's
+    likelihood is kept as its truncated SVD, ``lik`` (U, 2, M, R) the factors
+    (:data:`LOW_RANK_TOL`), and with one as (U, 1, M, 1)."""
+    y, cov, cens, ceil = (np.asarray(a, dtype=float) for a in (y, cov, cens, ceil))
+    U, P = y.shape
+    counts = cens.sum(axis=1).astype(int)
+    D = int(counts.max()) if U else 0
+    if D == 0:
+        return np.zeros((U, 0), int), np.zeros((U, 0, 1)), np.ones((U,))
+    # one or two components: one shape of the grids (two slots), one compiled sampler per (U, P)
+    D = max(D, min(2, P))
+    counts = GRID_NODES.get(D, GRID_NODES[3])
+    M = sum(counts)
+    slots = np.zeros((U, D), int)
+    nodes = np.tile(np.linspace(-1.0, 1.0, M), (U, D, 1))
+    lik = np.ones((U,) + (M,) * D)
+    for u in range(U):
+        c = np.flatnonzero(cens[u] > 0)
+        if not c.size:
+            continue
+        slots[u, :c.size] = c
+        xs = []
+        for d, t in enumerate(c):
+            th = _component_nodes(y[u, t], ceil[u, t], cov[u, t, t], counts)
+            nodes[u, d] = th
+            xs.append(_shift_np(th, y[u, t], ceil[u, t]))
+        inv = np.linalg.inv(cov[u][np.ix_(c, c)])
+        grid = np.meshgrid(*xs, indexing="ij")
+        q = sum(inv[i, j] * grid[i] * grid[j] for i in range(c.size) for j in range(c.size))
+        lu = np.exp(np.maximum(-0.5 * q, -700.0))
+        lik[u] = lu.reshape(lu.shape + (1,) * (D - c.size))  # constant along padded slots
+    if D == 2:  # the likelihood's tensor as a sum of separable terms (its SVD, truncated)
+        uu, sv, vv = np.linalg.svd(lik)
+        R = LOW_RANK  # a fixed rank: one shape of the grids; the terms past the tolerance 0
+        sv = np.where(sv > LOW_RANK_TOL * sv[:, :1], sv, 0.0)
+        root = np.sqrt(sv[:, :R])
+        lik = np.stack([uu[:, :, :R] * root[:, None, :],
+                        np.swapaxes(vv[:, :R, :], 1, 2) * root[:, None, :]], axis=1)
+    elif D == 1:
+        lik = lik[:, None, :, None]
+    return slots, nodes, lik
+
+
+def _bins(nodes, mu, s):
+    """The bins of a component's grid under theta ~ N(mu, s^2): the mass below the first
+    node, of each bin between nodes and above the last (M + 1,), and of each bin
+    E[(theta - t_k) / h_k 1(t_k < theta < t_k+1)] (M - 1,), in closed form (Phi, phi) and
+    in the tail that keeps precision far above mu."""
+    from jax.scipy.special import ndtr
+
+    a = (nodes - mu) / s
+    q = ndtr(-jnp.abs(a))  # the smaller tail at each node: one ndtr a node, full precision
+    below = jnp.where(a < 0, q, 1.0 - q)  # Phi(a)
+    lo = below[0]
+    hi = jnp.where(a[-1] > 0, q[-1], 1.0 - q[-1])
+    # a bin above mu: q_k - q_k+1; below: q_k+1 - q_k; across: 1 - q_k - q_k+1
+    mass = jnp.where(a[:-1] >= 0, q[:-1] - q[1:],
+                     jnp.where(a[1:] <= 0, q[1:] - q[:-1], 1.0 - q[:-1] - q[1:]))
+    pdf = jnp.exp(-0.5 * a**2) / jnp.sqrt(2.0 * jnp.pi)
+    h = nodes[1:] - nodes[:-1]
+    ramp = s * (pdf[:-1] - pdf[1:] - a[:-1] * mass) / h
+    return lo, mass, hi, ramp
+
+
+def hat_weights(nodes, mu, s):
+    """w_k = E[hat_k(theta)], theta ~ N(mu, s^2): the expectations of the piecewise-linear
+    interpolant's basis on ``nodes`` (the first and last held constant beyond the grid),
+    so that sum_k w_k f(t_k) is E[f(theta)] of the interpolant of f exactly, for any s
+    (s -> 0 gives the interpolant at mu); the weights sum to 1."""
+    lo, mass, hi, ramp = _bins(nodes, mu, s)
+    left = mass - ramp
+    w = jnp.concatenate([jnp.atleast_1d(lo), jnp.zeros_like(mass)]) + jnp.concatenate(
+        [left, jnp.zeros(1)]) + jnp.concatenate([jnp.zeros(1), ramp]) + jnp.concatenate(
+        [jnp.zeros_like(mass), jnp.atleast_1d(hi)])
+    return w
+
+
+def censored_marginal(mu, s, slots, nodes, lik):
+    """log E[exp(-x' Sigma_cc^-1 x / 2)] of one unit over its censored components
+    theta_t ~ N(mu_t, s_t^2), independent given (mu, s): the tensor product of each
+    component's :func:`hat_weights` contracted with its grid's likelihood
+    (:func:`censored_grids`). The likelihood lies in [e^-700, 1] and the weights sum to 1,
+    so the sum is neither over- nor underflowed; differentiable in (mu, s)."""
+    D = slots.shape[0]
+    if D == 0:
+        return jnp.zeros(())
+    if D <= 2:  # factors (D, M, R): sum_r prod_d (w_d' F_d)_r
+        t = jnp.ones(lik.shape[-1])
+        for d in range(D):
+            t = t * (hat_weights(nodes[d], mu[slots[d]], s[slots[d]]) @ lik[d])
+        return jnp.log(jnp.maximum(jnp.sum(t), 1e-300))
+    t = lik
+    for d in range(D - 1, -1, -1):
+        t = t @ hat_weights(nodes[d], mu[slots[d]], s[slots[d]])
+    return jnp.log(jnp.maximum(t, 1e-300))
+
+
+def unit_marginal(yu, cu, cens, mu, s, slots, nodes, lik):
+    """log p(y_u | mu, s): the resolved components' N(y_r; mu_r, Sigma_rr + S_rr) times the
+    censored components' likelihood integrated over theta_c ~ N(mu_c, S_cc)
+    (:func:`censored_marginal`; :func:`unit_log_lik` at the parameters integrated)."""
+    r = 1.0 - cens
+    A = (cu + jnp.diag(s**2)) * jnp.outer(r, r) + jnp.diag(cens)
+    L = jnp.linalg.cholesky(A)
+    z = jax.scipy.linalg.solve_triangular(L, (yu - mu) * r, lower=True)
+    gauss = (-0.5 * z @ z - jnp.sum(jnp.log(jnp.diag(L)))
+             - 0.5 * jnp.sum(r) * jnp.log(2 * jnp.pi))
+    return gauss + censored_marginal(mu, s, slots, nodes, lik)
 
 
 def _log_marginal(y, cov, cens, ceil, w, mu, s, theta):
@@ -279,17 +449,21 @@ def _start_without(adaptation, u: int, P: int) -> tuple:
     return inverse_mass, step_size
 
 
-def _log_lik_table(y, cov, cens, ceil, mu, spread, theta) -> np.ndarray:
-    """log p(y_u | mu_d, s_d, theta_ud) for every draw d and unit u: (D, U)."""
+def _log_lik_table(y, cov, cens, grid, mu, spread) -> np.ndarray:
+    """log p(y_u | mu_d, s_d) for every draw d and unit u, the unit's censored components
+    integrated out (:func:`unit_marginal` on :func:`censored_grids`' ``grid``): (D, U). The
+    importance ratio of unit u's leave-one-out posterior of (mu, s); a table at the sampled
+    theta_u instead weighs each draw by that unit's own censored parameters too, which
+    raises the Pareto k and with it the exact refits (benchmarks/RESULTS_pool.md)."""
     return np.asarray(_unit_log_lik_draws(jnp.asarray(y), jnp.asarray(cov), jnp.asarray(cens),
                                           jnp.asarray(mu), jnp.asarray(spread),
-                                          jnp.asarray(theta), jnp.asarray(ceil)))
+                                          *(jnp.asarray(a) for a in grid)))
 
 
-#: :func:`unit_log_lik` over units (inner) and draws (outer), compiled once per shape
-_unit_log_lik_draws = program(jax.vmap(jax.vmap(unit_log_lik,
-                                                in_axes=(0, 0, 0, None, None, 0, 0)),
-                                       in_axes=(None, None, None, 0, 0, 0, None)))
+#: :func:`unit_marginal` over units (inner) and draws (outer), compiled once per shape
+_unit_log_lik_draws = program(jax.vmap(jax.vmap(unit_marginal,
+                                                in_axes=(0, 0, 0, None, None, 0, 0, 0)),
+                                       in_axes=(None, None, None, 0, 0, None, None, None)))
 
 
 def _predictive_p(yu, cu, cens, mu, spread, log_w=None, test: str = "joint") -> float:
@@ -401,8 +575,9 @@ def fit_pool(y, cov, names, *, censored=None, ceiling=None, seed: int = 0,
         new_unit = mu + spread * rng.standard_normal(mu.shape)
         return PoolResult(tuple(names), mu, spread, units, new_unit, np.full(U, np.nan),
                           diagnostics, adaptation)
-    # leave-one-out on the joint posterior of (mu, s, theta): the ratio 1 / p(y_u | ...)
-    ll = _log_lik_table(y, cov, cens, ceil, mu, spread, theta)
+    # leave-one-out on the posterior of (mu, s), the units' censored parameters integrated
+    # out: the ratio 1 / p(y_u | mu, s)
+    ll = _log_lik_table(y, cov, cens, censored_grids(y, cov, cens, ceil), mu, spread)
     log_w, k_hat = psislw(-ll.T)  # (U, D) log ratios 1 / p(y_u | draw); k > 0.7: refitted
     outlier_p, method = np.empty(U), []
     refits = []
