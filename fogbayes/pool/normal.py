@@ -69,6 +69,16 @@ def censored_log_lik(theta, y, var, ceiling):
     return -censored_shift(theta, y, ceiling) ** 2 / (2.0 * var)
 
 
+def _resolved_log_lik(yu, cu, cens, mu, s):
+    """log N(y_r; mu_r, Sigma_rr + S_rr) of a unit's resolved components (r = 1 - cens)."""
+    r = 1.0 - cens
+    A = (cu + jnp.diag(s**2)) * jnp.outer(r, r) + jnp.diag(cens)
+    L = jnp.linalg.cholesky(A)
+    z = jax.scipy.linalg.solve_triangular(L, (yu - mu) * r, lower=True)
+    return (-0.5 * z @ z - jnp.sum(jnp.log(jnp.diag(L)))
+            - 0.5 * jnp.sum(r) * jnp.log(2 * jnp.pi))
+
+
 def unit_log_lik(yu, cu, cens, mu, s, theta, ceil):
     """log p(y_u | mu, s, theta_u): the unit's resolved components integrated out,
     N(y_r; mu_r, Sigma_rr + S_rr), times its censored components' joint likelihood at their
@@ -76,11 +86,7 @@ def unit_log_lik(yu, cu, cens, mu, s, theta, ceil):
     Sigma_cc (``cu``'s censored block; ``ceil`` the ceilings; no covariance between the
     censored and the resolved components; ``theta`` of resolved components is ignored)."""
     r = 1.0 - cens
-    A = (cu + jnp.diag(s**2)) * jnp.outer(r, r) + jnp.diag(cens)
-    L = jnp.linalg.cholesky(A)
-    z = jax.scipy.linalg.solve_triangular(L, (yu - mu) * r, lower=True)
-    gauss = (-0.5 * z @ z - jnp.sum(jnp.log(jnp.diag(L)))
-             - 0.5 * jnp.sum(r) * jnp.log(2 * jnp.pi))
+    gauss = _resolved_log_lik(yu, cu, cens, mu, s)
     Lc = jnp.linalg.cholesky(cu * jnp.outer(cens, cens) + jnp.diag(r))
     x = jnp.where(cens > 0, censored_shift(theta, yu, jnp.where(cens > 0, ceil, yu + 1.0)), 0.0)
     zc = jax.scipy.linalg.solve_triangular(Lc, x, lower=True)
@@ -247,12 +253,7 @@ def unit_marginal(yu, cu, cens, mu, s, slots, nodes, lik):
     """log p(y_u | mu, s): the resolved components' N(y_r; mu_r, Sigma_rr + S_rr) times the
     censored components' likelihood integrated over theta_c ~ N(mu_c, S_cc)
     (:func:`censored_marginal`; :func:`unit_log_lik` at the parameters integrated)."""
-    r = 1.0 - cens
-    A = (cu + jnp.diag(s**2)) * jnp.outer(r, r) + jnp.diag(cens)
-    L = jnp.linalg.cholesky(A)
-    z = jax.scipy.linalg.solve_triangular(L, (yu - mu) * r, lower=True)
-    gauss = (-0.5 * z @ z - jnp.sum(jnp.log(jnp.diag(L)))
-             - 0.5 * jnp.sum(r) * jnp.log(2 * jnp.pi))
+    gauss = _resolved_log_lik(yu, cu, cens, mu, s)
     return gauss + censored_marginal(mu, s, slots, nodes, lik)
 
 
