@@ -101,7 +101,6 @@ def _shift_np(theta, y, ceiling):
     return np.logaddexp(a, log_rest) - np.logaddexp(b, log_rest)
 
 
-
 #: nodes of a censored component's quadrature grid (:func:`censored_grids`) by the most
 #: components one unit censors, (plateau, core, tail): the tensor grid of a unit has M^D
 #: points, M their sum. The error of its marginal against a fine grid:
@@ -161,7 +160,7 @@ def censored_grids(y, cov, cens, ceil):
     D = int(counts.max()) if U else 0
     if D == 0:
         return np.zeros((U, 0), int), np.zeros((U, 0, 1)), np.ones((U,))
-    # one or two components: one shape of the grids (two slots), one compiled sampler per (U, P)
+    # one or two components: one shape of the grids (two slots), one compiled table per (U, P)
     D = max(D, min(2, P))
     counts = GRID_NODES.get(D, GRID_NODES[3])
     M = sum(counts)
